@@ -1,0 +1,74 @@
+#include "server/core/humanoid_state.h"
+
+#include <algorithm>
+
+namespace modskill {
+
+void HumanoidState::Resize(int num_bodies, int num_hinges) {
+  body_pos.resize(num_bodies);
+  body_rot.resize(num_bodies);
+  body_vel.resize(num_bodies);
+  body_ang_vel.resize(num_bodies);
+  dof_pos.resize(num_hinges);
+  dof_vel.resize(num_hinges);
+}
+
+void ReadSimulatedState(const HumanoidModel& humanoid, const mjData* data, HumanoidState* state) {
+  const mjModel* m = humanoid.model();
+  for (int b = 0; b < humanoid.num_bodies(); ++b) {
+    const int id = humanoid.mj_body_id(b);
+    const mjtNum* p = data->xpos + 3 * id;
+    const mjtNum* q = data->xquat + 4 * id;
+    state->body_pos[b] = Vec3(p[0], p[1], p[2]);
+    state->body_rot[b] = Quat(q[0], q[1], q[2], q[3]);
+    mjtNum velocity[6];  // [angular, linear] at the body frame origin, world orientation
+    mj_objectVelocity(m, data, mjOBJ_XBODY, id, velocity, 0);
+    state->body_ang_vel[b] = Vec3(velocity[0], velocity[1], velocity[2]);
+    state->body_vel[b] = Vec3(velocity[3], velocity[4], velocity[5]);
+  }
+  const int qpos0 = humanoid.hinge_qpos_start(), qvel0 = humanoid.hinge_qvel_start();
+  for (int h = 0; h < humanoid.num_hinges(); ++h) {
+    state->dof_pos[h] = data->qpos[qpos0 + h];
+    state->dof_vel[h] = data->qvel[qvel0 + h];
+  }
+}
+
+void ReadReferenceState(const MotionClip& clip, int frame, HumanoidState* state) {
+  const int bodies = clip.num_bodies, hinges = clip.num_hinges();
+  std::copy_n(clip.body_pos.begin() + frame * bodies, bodies, state->body_pos.begin());
+  std::copy_n(clip.body_rot.begin() + frame * bodies, bodies, state->body_rot.begin());
+  std::copy_n(clip.body_vel.begin() + frame * bodies, bodies, state->body_vel.begin());
+  std::copy_n(clip.body_ang_vel.begin() + frame * bodies, bodies, state->body_ang_vel.begin());
+  std::copy_n(clip.dof_pos.begin() + frame * hinges, hinges, state->dof_pos.begin());
+  std::copy_n(clip.dof_vel.begin() + frame * hinges, hinges, state->dof_vel.begin());
+}
+
+void SetSimulationToReference(const HumanoidModel& humanoid, const MotionClip& clip, int frame, mjData* data) {
+  const mjModel* m = humanoid.model();
+  mj_resetData(m, data);
+  const int bodies = clip.num_bodies, hinges = clip.num_hinges();
+  if (!humanoid.options().fixed_root) {
+    const Vec3& pos = clip.body_pos[frame * bodies];
+    const Quat& rot = clip.body_rot[frame * bodies];
+    const Vec3& vel = clip.body_vel[frame * bodies];
+    // MuJoCo's free joint takes its angular velocity in the body frame.
+    const Vec3 ang_vel_local = rot.conjugate() * clip.body_ang_vel[frame * bodies];
+    for (int k = 0; k < 3; ++k) data->qpos[k] = pos[k];
+    data->qpos[3] = rot.w();
+    data->qpos[4] = rot.x();
+    data->qpos[5] = rot.y();
+    data->qpos[6] = rot.z();
+    for (int k = 0; k < 3; ++k) {
+      data->qvel[k] = vel[k];
+      data->qvel[3 + k] = ang_vel_local[k];
+    }
+  }
+  const int qpos0 = humanoid.hinge_qpos_start(), qvel0 = humanoid.hinge_qvel_start();
+  for (int h = 0; h < hinges; ++h) {
+    data->qpos[qpos0 + h] = clip.dof_pos[frame * hinges + h];
+    data->qvel[qvel0 + h] = clip.dof_vel[frame * hinges + h];
+  }
+  mj_forward(m, data);
+}
+
+}  // namespace modskill

@@ -1,0 +1,197 @@
+#include "server/core/motion_clip.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "absl/strings/match.h"
+#include "absl/strings/str_cat.h"
+
+namespace modskill {
+namespace {
+
+bool Finite(const Vec3& v) { return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z()); }
+
+// Lowest z of one body's geometry placed at (pos, rot).
+double GeomBottom(const GeomSpec& g, const Vec3& pos, const Quat& rot) {
+  switch (g.type) {
+    case GeomSpec::Type::kSphere:
+      return (pos + rot * g.center).z() - g.radius;
+    case GeomSpec::Type::kCapsule:
+      return std::min((pos + rot * g.from).z(), (pos + rot * g.to).z()) - g.radius;
+    case GeomSpec::Type::kBox: {
+      double lowest = std::numeric_limits<double>::infinity();
+      for (int corner = 0; corner < 8; ++corner) {
+        const Vec3 c(corner & 1 ? g.half_extents.x() : -g.half_extents.x(),
+                     corner & 2 ? g.half_extents.y() : -g.half_extents.y(),
+                     corner & 4 ? g.half_extents.z() : -g.half_extents.z());
+        lowest = std::min(lowest, (pos + rot * (g.center + c)).z());
+      }
+      return lowest;
+    }
+  }
+  return 0;
+}
+
+}  // namespace
+
+absl::Status ValidateClip(const MotionClip& clip) {
+  const std::string where = absl::StrCat("clip '", clip.name, "'");
+  if (clip.num_frames < 2) return absl::InvalidArgumentError(absl::StrCat(where, ": num_frames ", clip.num_frames, " < 2"));
+  if (!(clip.fps > 0 && clip.fps <= 10000)) {
+    return absl::InvalidArgumentError(absl::StrCat(where, ": fps ", clip.fps, " outside (0, 10000]"));
+  }
+  if (clip.num_bodies < 1) return absl::InvalidArgumentError(absl::StrCat(where, ": num_bodies ", clip.num_bodies));
+  if (clip.root_pos.size() != static_cast<size_t>(clip.num_frames)) {
+    return absl::InvalidArgumentError(absl::StrCat(where, ": root_pos has ", clip.root_pos.size(), " rows, expected ",
+                                                   clip.num_frames));
+  }
+  if (clip.local_rot.size() != static_cast<size_t>(clip.num_frames) * clip.num_bodies) {
+    return absl::InvalidArgumentError(absl::StrCat(where, ": local_rot has ", clip.local_rot.size(), " entries, expected ",
+                                                   clip.num_frames * clip.num_bodies));
+  }
+  for (int f = 0; f < clip.num_frames; ++f) {
+    if (!Finite(clip.root_pos[f])) {
+      return absl::InvalidArgumentError(absl::StrCat(where, ": root_pos of frame ", f, " is not finite"));
+    }
+    for (int b = 0; b < clip.num_bodies; ++b) {
+      const Quat& q = clip.local(f, b);
+      if (!std::isfinite(q.w()) || !Finite(q.vec())) {
+        return absl::InvalidArgumentError(absl::StrCat(where, ": rotation of body ", b, " in frame ", f, " is not finite"));
+      }
+      if (std::abs(q.norm() - 1.0) > 1e-3) {
+        return absl::InvalidArgumentError(absl::StrCat(where, ": rotation of body ", b, " in frame ", f,
+                                                       " is not a unit quaternion (norm ", q.norm(), ")"));
+      }
+    }
+  }
+  return absl::OkStatus();
+}
+
+absl::Status ComputeClipKinematics(const HumanoidSpec& spec, MotionClip* clip) {
+  if (clip->num_bodies != spec.num_bodies()) {
+    return absl::InvalidArgumentError(absl::StrCat("clip '", clip->name, "': ", clip->num_bodies,
+                                                   " bodies but the skeleton has ", spec.num_bodies()));
+  }
+  if (auto status = ValidateClip(*clip); !status.ok()) return status;
+  const int frames = clip->num_frames, bodies = clip->num_bodies, hinges = clip->num_hinges();
+  clip->body_pos.assign(frames * bodies, Vec3::Zero());
+  clip->body_rot.assign(frames * bodies, Quat::Identity());
+  clip->body_vel.assign(frames * bodies, Vec3::Zero());
+  clip->body_ang_vel.assign(frames * bodies, Vec3::Zero());
+  clip->dof_pos.assign(frames * hinges, 0.0);
+  clip->dof_vel.assign(frames * hinges, 0.0);
+  for (int f = 0; f < frames; ++f) {
+    for (int b = 0; b < bodies; ++b) {
+      const int i = f * bodies + b;
+      const Quat local = clip->local_rot[i].normalized();
+      const int parent = spec.body(b).parent;
+      if (parent < 0) {
+        clip->body_pos[i] = clip->root_pos[f];
+        clip->body_rot[i] = local;
+      } else {
+        const int p = f * bodies + parent;
+        clip->body_pos[i] = clip->body_pos[p] + clip->body_rot[p] * spec.body(b).offset;
+        clip->body_rot[i] = (clip->body_rot[p] * local).normalized();
+        const Vec3 angles = IntrinsicXyzFromQuat(local);
+        for (int a = 0; a < 3; ++a) clip->dof_pos[f * hinges + 3 * (b - 1) + a] = angles[a];
+      }
+    }
+  }
+  // Central differences inside, one-sided at the ends.
+  const double dt = 1.0 / clip->fps;
+  for (int f = 0; f < frames; ++f) {
+    const int f0 = std::max(0, f - 1), f1 = std::min(frames - 1, f + 1);
+    const double span = (f1 - f0) * dt;
+    for (int h = 0; h < hinges; ++h) {
+      clip->dof_vel[f * hinges + h] = WrapAngle(clip->dof_pos[f1 * hinges + h] - clip->dof_pos[f0 * hinges + h]) / span;
+    }
+    // The root's velocities come from differences; every other body's are propagated from
+    // its parent and its hinge rates, exactly as MuJoCo does, so that a simulation set to
+    // this frame reports the same body velocities as the reference.
+    const int r = f * bodies;
+    clip->body_vel[r] = (clip->body_pos[f1 * bodies] - clip->body_pos[f0 * bodies]) / span;
+    clip->body_ang_vel[r] = AngularVelocity(clip->body_rot[f0 * bodies], clip->body_rot[f1 * bodies], span);
+    for (int b = 1; b < bodies; ++b) {
+      const int i = r + b, p = r + spec.body(b).parent;
+      const double* angle = &clip->dof_pos[f * hinges + 3 * (b - 1)];
+      const double* rate = &clip->dof_vel[f * hinges + 3 * (b - 1)];
+      const Quat rx(Eigen::AngleAxisd(angle[0], Vec3::UnitX()));
+      const Quat ry(Eigen::AngleAxisd(angle[1], Vec3::UnitY()));
+      const Vec3 relative = rate[0] * Vec3::UnitX() + rx * (rate[1] * Vec3::UnitY() + ry * (rate[2] * Vec3::UnitZ()));
+      clip->body_ang_vel[i] = clip->body_ang_vel[p] + clip->body_rot[p] * relative;
+      clip->body_vel[i] = clip->body_vel[p] + clip->body_ang_vel[p].cross(clip->body_pos[i] - clip->body_pos[p]);
+    }
+  }
+  return absl::OkStatus();
+}
+
+MotionClip ResampleClip(const MotionClip& clip, double fps) {
+  MotionClip out;
+  out.name = clip.name;
+  out.label = clip.label;
+  out.humanml3d_id = clip.humanml3d_id;
+  out.source = clip.source;
+  out.num_bodies = clip.num_bodies;
+  out.fps = fps;
+  out.num_frames = std::max(2, static_cast<int>(std::floor(clip.duration() * fps + 1e-6)) + 1);
+  out.root_pos.resize(out.num_frames);
+  out.local_rot.resize(static_cast<size_t>(out.num_frames) * out.num_bodies);
+  for (int f = 0; f < out.num_frames; ++f) {
+    const double source_frame = std::min(f / fps * clip.fps, static_cast<double>(clip.num_frames - 1));
+    const int f0 = std::min(static_cast<int>(source_frame), clip.num_frames - 2);
+    const double alpha = source_frame - f0;
+    out.root_pos[f] = (1 - alpha) * clip.root_pos[f0] + alpha * clip.root_pos[f0 + 1];
+    for (int b = 0; b < clip.num_bodies; ++b) {
+      out.local(f, b) = clip.local(f0, b).slerp(alpha, clip.local(f0 + 1, b)).normalized();
+    }
+  }
+  return out;
+}
+
+double LowestGeomPoint(const HumanoidSpec& spec, const MotionClip& clip, int frame) {
+  double lowest = std::numeric_limits<double>::infinity();
+  for (int b = 0; b < clip.num_bodies; ++b) {
+    const int i = frame * clip.num_bodies + b;
+    lowest = std::min(lowest, GeomBottom(spec.body(b).geom, clip.body_pos[i], clip.body_rot[i]));
+  }
+  return lowest;
+}
+
+absl::Status PlaceOnGround(const HumanoidSpec& spec, MotionClip* clip) {
+  if (auto status = ComputeClipKinematics(spec, clip); !status.ok()) return status;
+  std::vector<double> lowest(clip->num_frames);
+  for (int f = 0; f < clip->num_frames; ++f) lowest[f] = LowestGeomPoint(spec, *clip, f);
+  // A low percentile, not the minimum, sets the floor: mocap often starts with a calibration
+  // pose or has a few glitched frames that would leave the rest of the clip floating.
+  std::vector<double> sorted = lowest;
+  const size_t k = sorted.size() / 20;
+  std::nth_element(sorted.begin(), sorted.begin() + k, sorted.end());
+  const double floor = sorted[k];
+  for (int f = 0; f < clip->num_frames; ++f) {
+    // Frames that would still be under the floor are lifted just enough: no start in the ground.
+    clip->root_pos[f].z() -= floor + std::min(0.0, lowest[f] - floor);
+  }
+  return ComputeClipKinematics(spec, clip);
+}
+
+double FootContactRatio(const HumanoidSpec& spec, const MotionClip& clip, double threshold) {
+  if (clip.body_pos.empty() || clip.num_frames == 0) return 0.0;
+  std::vector<int> feet;
+  for (int b = 0; b < spec.num_bodies(); ++b) {
+    if (absl::StrContains(spec.body(b).name, "Ankle") || absl::StrContains(spec.body(b).name, "Toe")) feet.push_back(b);
+  }
+  int in_contact = 0;
+  for (int f = 0; f < clip.num_frames; ++f) {
+    for (int b : feet) {
+      const int i = f * clip.num_bodies + b;
+      if (GeomBottom(spec.body(b).geom, clip.body_pos[i], clip.body_rot[i]) < threshold) {
+        ++in_contact;
+        break;
+      }
+    }
+  }
+  return static_cast<double>(in_contact) / clip.num_frames;
+}
+
+}  // namespace modskill

@@ -1,0 +1,40 @@
+// Importers from the motion formats of the field onto the 24-body humanoid:
+// AMASS/SMPL(-H) .npz, CMU BVH, DeepMimic humanoid3d .txt, and the native .msclip.
+#ifndef MODSKILL_SERVER_CORE_MOTION_IMPORT_H_
+#define MODSKILL_SERVER_CORE_MOTION_IMPORT_H_
+
+#include <string>
+
+#include "absl/status/statusor.h"
+#include "absl/strings/string_view.h"
+#include "server/core/humanoid_spec.h"
+#include "server/core/motion_clip.h"
+
+namespace modskill {
+
+struct ImportOptions {
+  double target_fps = 30.0;     // the control rate
+  bool place_on_ground = true;  // lowest geometry over the clip touches z = 0
+  std::string name;             // default: derived from the file name
+  std::string label;
+  std::string humanml3d_id;
+};
+
+// Picks the importer from the extension (and, for .txt, the content), resamples, grounds and
+// computes kinematics. Errors name the file and the field.
+absl::StatusOr<MotionClip> ImportMotionFile(const std::string& path, const HumanoidSpec& spec,
+                                            const ImportOptions& options = {});
+
+// The raw importers: clip at the file's own rate, on the humanoid, kinematics not yet computed.
+absl::StatusOr<MotionClip> ImportAmassNpz(const std::string& path, const HumanoidSpec& spec);
+absl::StatusOr<MotionClip> ImportCmuBvh(const std::string& path, const HumanoidSpec& spec);
+absl::StatusOr<MotionClip> ImportDeepMimic(const std::string& path, const HumanoidSpec& spec);
+absl::StatusOr<MotionClip> ImportDeepMimicText(absl::string_view text, absl::string_view what,
+                                               const HumanoidSpec& spec);
+
+// "humanoid3d_walk.txt" -> "deepmimic_walk", "02_01.bvh" -> "cmu_02_01", "x.npz" -> "x".
+std::string DefaultClipName(const std::string& path);
+
+}  // namespace modskill
+
+#endif  // MODSKILL_SERVER_CORE_MOTION_IMPORT_H_

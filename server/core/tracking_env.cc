@@ -1,0 +1,172 @@
+#include "server/core/tracking_env.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include "server/core/observation.h"
+
+namespace modskill {
+
+TrackingEnv::TrackingEnv(const EnvContext* context, uint64_t seed)
+    : context_(context), data_(mj_makeData(context->humanoid->model())), pd_(*context->humanoid), rng_(seed) {
+  const int bodies = context->humanoid->num_bodies(), hinges = context->humanoid->num_hinges();
+  sim_.Resize(bodies, hinges);
+  reference_.Resize(bodies, hinges);
+  target_.Resize(bodies, hinges);
+  pd_targets_.assign(hinges, 0.0);
+  amp_history_.assign(static_cast<size_t>(kAmpHistory) * context->spec->amp_obs_per_frame, 0.f);
+}
+
+TrackingEnv::~TrackingEnv() { mj_deleteData(data_); }
+
+void TrackingEnv::Reset(EnvRow row) {
+  const int clip = context_->sampler->Sample(rng_);
+  const int frames = context_->motions->clip(clip).num_frames;
+  // The last frame has no next target, so episodes start at most at frames - 2.
+  const int frame = context_->config.random_start_frame
+                        ? std::uniform_int_distribution<int>(0, std::max(0, frames - 2))(rng_)
+                        : 0;
+  ResetTo(clip, frame, row);
+}
+
+void TrackingEnv::ResetTo(int clip, int frame, EnvRow row) {
+  const MotionClip& motion = context_->motions->clip(clip);
+  clip_ = clip;
+  frame_ = std::clamp(frame, 0, motion.num_frames - 2);
+  episode_steps_ = 0;
+  SetSimulationToReference(*context_->humanoid, motion, frame_, data_);
+  // AMP history starts as the reference's own recent past.
+  const int per_frame = context_->spec->amp_obs_per_frame;
+  for (int k = 0; k < kAmpHistory; ++k) {
+    ReadReferenceState(motion, std::max(0, frame_ - k), &reference_);
+    WriteAmpFrame(*context_->spec, reference_, &amp_history_[static_cast<size_t>(k) * per_frame]);
+  }
+  amp_head_ = 0;  // the newest frame sits at amp_head_, older ones at amp_head_ + 1, + 2, ...
+  WriteObservation(row);
+}
+
+void TrackingEnv::UpdateKinematics() {
+  const mjModel* m = context_->humanoid->model();
+  // mj_step leaves positions-dependent quantities one step behind; refresh what the
+  // observation reads (body poses and com velocities) without a full mj_forward.
+  mj_kinematics(m, data_);
+  mj_comPos(m, data_);
+  mj_comVel(m, data_);
+}
+
+void TrackingEnv::RefreshObservation(EnvRow row) {
+  mj_forward(context_->humanoid->model(), data_);
+  WriteObservation(row);
+}
+
+bool TrackingEnv::PhysicsDiverged() const {
+  const mjModel* m = context_->humanoid->model();
+  for (int i = 0; i < m->nq; ++i) {
+    if (!std::isfinite(data_->qpos[i])) return true;
+  }
+  for (int i = 0; i < m->nv; ++i) {
+    if (!std::isfinite(data_->qvel[i]) || std::abs(data_->qvel[i]) > 1e3) return true;
+  }
+  return data_->warning[mjWARN_BADQACC].number > 0;
+}
+
+TrackingErrors TrackingEnv::CurrentTrackingTerms(float* terms) {
+  ReadSimulatedState(*context_->humanoid, data_, &sim_);
+  ReadReferenceState(context_->motions->clip(clip_), frame_, &reference_);
+  return ComputeImitationTerms(context_->config.reward, sim_, reference_, terms);
+}
+
+void TrackingEnv::Step(const float* action, EnvRow row) {
+  const HumanoidModel& humanoid = *context_->humanoid;
+  const EnvSpec& spec = *context_->spec;
+  const TrackingEnvConfig& config = context_->config;
+  const std::vector<double>& offset = humanoid.action_offset();
+  const std::vector<double>& scale = humanoid.action_scale();
+  for (int a = 0; a < spec.action_size; ++a) {
+    const int h = spec.action_hinge[a];
+    pd_targets_[h] = offset[h] + scale[h] * std::clamp(static_cast<double>(action[a]), -1.0, 1.0);
+  }
+  const double power = pd_.Step(pd_targets_.data(), data_);
+  ++episode_steps_;
+  ++frame_;
+  const int i = row.index;
+  BatchBuffers& out = *row.buffers;
+  float* terms = &out.reward_terms[static_cast<size_t>(i) * kNumRewardTerms];
+
+  if (PhysicsDiverged()) {
+    // A blow-up ends this episode only; the other envs never see it.
+    ++physics_resets_;
+    std::fill(terms, terms + kNumRewardTerms, 0.f);
+    out.reward[i] = 0.f;
+    out.done[i] = 1;
+    out.truncated[i] = 0;
+    out.ended_clip_id[i] = clip_;
+    out.ended_frame[i] = frame_;
+    out.max_body_error[i] = std::numeric_limits<float>::infinity();
+    out.mean_body_error[i] = std::numeric_limits<float>::infinity();
+    Reset(row);
+    return;
+  }
+  UpdateKinematics();
+  const TrackingErrors errors = CurrentTrackingTerms(terms);
+  terms[kRewardEnergy] = episode_steps_ > config.reward.energy_free_steps
+                             ? static_cast<float>(-config.reward.energy_coefficient * power)
+                             : 0.f;
+  float reward = 0.f;
+  for (int t = 0; t < kNumRewardTerms; ++t) reward += terms[t];
+  out.reward[i] = reward;
+  out.max_body_error[i] = static_cast<float>(errors.max_body_distance);
+  out.mean_body_error[i] = static_cast<float>(errors.mean_body_distance);
+
+  bool terminated = false;
+  switch (config.termination) {
+    case TerminationMode::kTraining:
+      terminated = errors.max_body_distance > config.termination_distance;
+      break;
+    case TerminationMode::kEvaluation:
+      terminated = errors.mean_body_distance > config.termination_distance;
+      break;
+    case TerminationMode::kNone:
+      break;
+  }
+  const MotionClip& motion = context_->motions->clip(clip_);
+  const bool truncated = !terminated && (frame_ >= motion.num_frames - 1 ||
+                                         (config.max_episode_steps > 0 && episode_steps_ >= config.max_episode_steps));
+  out.done[i] = terminated || truncated;
+  out.truncated[i] = truncated;
+  if (terminated || truncated) {
+    out.ended_clip_id[i] = clip_;
+    out.ended_frame[i] = frame_;
+    Reset(row);
+    return;
+  }
+  // Push the new frame into the AMP ring.
+  const int per_frame = spec.amp_obs_per_frame;
+  amp_head_ = (amp_head_ + kAmpHistory - 1) % kAmpHistory;
+  WriteAmpFrame(spec, sim_, &amp_history_[static_cast<size_t>(amp_head_) * per_frame]);
+  WriteObservation(row);
+}
+
+void TrackingEnv::WriteObservation(EnvRow row) {
+  const EnvSpec& spec = *context_->spec;
+  const MotionClip& motion = context_->motions->clip(clip_);
+  BatchBuffers& out = *row.buffers;
+  const int i = row.index;
+  ReadSimulatedState(*context_->humanoid, data_, &sim_);
+  ReadReferenceState(motion, std::min(frame_ + 1, motion.num_frames - 1), &target_);
+  WriteTrackingObservation(spec, sim_, target_, &out.obs[static_cast<size_t>(i) * spec.obs_size]);
+  // AMP rows are newest first.
+  float* amp = &out.amp_obs[static_cast<size_t>(i) * spec.amp_obs_size];
+  const int per_frame = spec.amp_obs_per_frame;
+  for (int k = 0; k < kAmpHistory; ++k) {
+    const int slot = (amp_head_ + k) % kAmpHistory;
+    std::memcpy(amp + static_cast<size_t>(k) * per_frame, &amp_history_[static_cast<size_t>(slot) * per_frame],
+                sizeof(float) * per_frame);
+  }
+  out.clip_id[i] = clip_;
+  out.frame[i] = frame_;
+}
+
+}  // namespace modskill

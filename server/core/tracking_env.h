@@ -1,0 +1,100 @@
+// One humanoid tracking one reference clip: reference state initialization, PD control,
+// imitation reward, termination, truncation and automatic reset. Writes its row of the batch.
+#ifndef MODSKILL_SERVER_CORE_TRACKING_ENV_H_
+#define MODSKILL_SERVER_CORE_TRACKING_ENV_H_
+
+#include <cstdint>
+#include <memory>
+#include <random>
+#include <vector>
+
+#include <mujoco/mujoco.h>
+
+#include "server/core/batch_buffers.h"
+#include "server/core/clip_sampler.h"
+#include "server/core/env_spec.h"
+#include "server/core/humanoid_model.h"
+#include "server/core/humanoid_state.h"
+#include "server/core/imitation_reward.h"
+#include "server/core/motion_library.h"
+#include "server/core/pd_controller.h"
+
+namespace modskill {
+
+enum class TerminationMode {
+  kTraining,    // any body farther than `termination_distance` (0.25 m) from its reference
+  kEvaluation,  // mean body distance above `termination_distance` (0.5 m)
+  kNone,        // only truncation at the clip's end
+};
+
+struct TrackingEnvConfig {
+  TerminationMode termination = TerminationMode::kTraining;
+  double termination_distance = 0.25;  // m
+  ImitationRewardConfig reward;
+  int max_episode_steps = 0;  // 0: until the clip ends
+  bool random_start_frame = true;
+};
+
+// The shared, read-only context of a batch of envs.
+struct EnvContext {
+  std::shared_ptr<const HumanoidModel> humanoid;
+  std::shared_ptr<const EnvSpec> spec;
+  std::shared_ptr<const MotionLibrary> motions;
+  const ClipSampler* sampler = nullptr;
+  TrackingEnvConfig config;
+};
+
+// Where env i writes in a BatchBuffers.
+struct EnvRow {
+  BatchBuffers* buffers;
+  int index;
+};
+
+class TrackingEnv {
+ public:
+  TrackingEnv(const EnvContext* context, uint64_t seed);
+  ~TrackingEnv();
+  TrackingEnv(const TrackingEnv&) = delete;
+  TrackingEnv& operator=(const TrackingEnv&) = delete;
+
+  // New episode on a sampled clip and start frame; writes the row's observation.
+  void Reset(EnvRow row);
+  // New episode on a given clip and frame (tests, rollouts).
+  void ResetTo(int clip, int frame, EnvRow row);
+  // One control step with `action` (action_size values, part order, in [-1, 1]).
+  void Step(const float* action, EnvRow row);
+
+  const mjData* data() const { return data_; }
+  mjData* mutable_data() { return data_; }
+  int clip() const { return clip_; }
+  int frame() const { return frame_; }
+  int64_t physics_resets() const { return physics_resets_; }
+  // Reward terms and errors of the current state against the reference at the current frame.
+  TrackingErrors CurrentTrackingTerms(float* terms);
+  // Recomputes kinematics from qpos/qvel and rewrites the row's observation (after external
+  // changes to the state, such as a push).
+  void RefreshObservation(EnvRow row);
+
+ private:
+  void WriteObservation(EnvRow row);
+  bool PhysicsDiverged() const;
+  void UpdateKinematics();
+
+  const EnvContext* context_;
+  mjData* data_;
+  PdController pd_;
+  std::mt19937_64 rng_;
+  int clip_ = 0;
+  int frame_ = 0;
+  int episode_steps_ = 0;
+  int64_t physics_resets_ = 0;
+  // Preallocated scratch so that Step never allocates.
+  HumanoidState sim_, reference_, target_;
+  std::vector<double> pd_targets_;
+  std::vector<float> amp_history_;  // ring of kAmpHistory frames
+  int amp_head_ = 0;                // index of the newest frame
+};
+
+}  // namespace modskill
+
+#endif  // MODSKILL_SERVER_CORE_TRACKING_ENV_H_

@@ -1,0 +1,166 @@
+// modskill-motion: imports motion files into the native clip format and inspects clips.
+//
+//   modskill-motion import IN... --out DIR [--labels CSV] [--fps 30]
+//   modskill-motion inspect FILE...
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "absl/flags/flag.h"
+#include "absl/flags/parse.h"
+#include "absl/flags/usage.h"
+#include "absl/strings/str_format.h"
+#include "absl/strings/str_split.h"
+#include "absl/strings/strip.h"
+#include "server/core/clip_file.h"
+#include "server/core/humanoid_spec.h"
+#include "server/core/motion_import.h"
+
+ABSL_FLAG(std::string, out, "", "import: directory the .msclip files are written to");
+ABSL_FLAG(std::string, labels, "", "import: CSV 'name,humanml3d_id,label' giving clips their captions");
+ABSL_FLAG(double, fps, 30.0, "import: rate the clips are resampled to (the control rate)");
+ABSL_FLAG(bool, ground, true, "import: shift each clip so that its lowest point touches the floor");
+
+namespace modskill {
+namespace {
+
+struct ClipLabel {
+  std::string humanml3d_id;
+  std::string label;
+};
+
+// name,humanml3d_id,label (label may contain commas); '#' starts a comment line.
+bool ReadLabels(const std::string& path, std::map<std::string, ClipLabel>* labels) {
+  std::ifstream in(path);
+  if (!in) {
+    std::fprintf(stderr, "error: --labels %s: cannot open\n", path.c_str());
+    return false;
+  }
+  std::string line;
+  int line_number = 0;
+  while (std::getline(in, line)) {
+    ++line_number;
+    if (line.empty() || line[0] == '#') continue;
+    std::vector<std::string> fields = absl::StrSplit(line, absl::MaxSplits(',', 2));
+    if (fields.size() != 3) {
+      std::fprintf(stderr, "error: --labels %s:%d: expected name,humanml3d_id,label\n", path.c_str(), line_number);
+      return false;
+    }
+    (*labels)[fields[0]] = ClipLabel{std::string(absl::StripAsciiWhitespace(fields[1])),
+                                     std::string(absl::StripAsciiWhitespace(fields[2]))};
+  }
+  return true;
+}
+
+void PrintSummary(const HumanoidSpec& spec, const MotionClip& clip, const std::string& file) {
+  double min_height = 1e9, max_height = -1e9, mean_height = 0;
+  for (int f = 0; f < clip.num_frames; ++f) {
+    const double z = clip.body_pos[f * clip.num_bodies].z();
+    min_height = std::min(min_height, z);
+    max_height = std::max(max_height, z);
+    mean_height += z / clip.num_frames;
+  }
+  // Standing height: from the lowest geometry point to the top of the head in the first frame.
+  const int head = spec.BodyIndex("Head");
+  double top = 0;
+  if (head >= 0) top = clip.body_pos[head].z() + spec.body(head).geom.radius;
+  std::printf("%s\n", file.c_str());
+  std::printf("  name            %s\n", clip.name.c_str());
+  std::printf("  label           %s\n", clip.label.empty() ? "-" : clip.label.c_str());
+  std::printf("  humanml3d_id    %s\n", clip.humanml3d_id.empty() ? "-" : clip.humanml3d_id.c_str());
+  std::printf("  source          %s\n", clip.source.c_str());
+  std::printf("  frames          %d\n", clip.num_frames);
+  std::printf("  fps             %.2f\n", clip.fps);
+  std::printf("  duration        %.3f s\n", clip.duration());
+  std::printf("  height          %.3f m (head top above the floor, frame 0)\n", top - LowestGeomPoint(spec, clip, 0));
+  std::printf("  root height     mean %.3f  min %.3f  max %.3f m\n", mean_height, min_height, max_height);
+  std::printf("  foot contact    %.1f %% of frames\n", 100.0 * FootContactRatio(spec, clip));
+}
+
+int Import(const std::vector<std::string>& inputs, const HumanoidSpec& spec) {
+  const std::string out_dir = absl::GetFlag(FLAGS_out);
+  if (out_dir.empty()) {
+    std::fprintf(stderr, "error: import needs --out DIR\n");
+    return 2;
+  }
+  std::map<std::string, ClipLabel> labels;
+  if (!absl::GetFlag(FLAGS_labels).empty() && !ReadLabels(absl::GetFlag(FLAGS_labels), &labels)) return 2;
+  std::error_code error;
+  std::filesystem::create_directories(out_dir, error);
+  if (error) {
+    std::fprintf(stderr, "error: --out %s: %s\n", out_dir.c_str(), error.message().c_str());
+    return 2;
+  }
+  ImportOptions options;
+  options.target_fps = absl::GetFlag(FLAGS_fps);
+  options.place_on_ground = absl::GetFlag(FLAGS_ground);
+  int failures = 0;
+  for (const std::string& input : inputs) {
+    ImportOptions file_options = options;
+    auto label = labels.find(DefaultClipName(input));
+    if (label != labels.end()) {
+      file_options.label = label->second.label;
+      file_options.humanml3d_id = label->second.humanml3d_id;
+    }
+    auto clip = ImportMotionFile(input, spec, file_options);
+    if (!clip.ok()) {
+      std::fprintf(stderr, "error: %s\n", std::string(clip.status().message()).c_str());
+      ++failures;
+      continue;
+    }
+    const std::string out_path = out_dir + "/" + clip->name + std::string(kClipFileExtension);
+    if (auto status = WriteClipFile(out_path, *clip); !status.ok()) {
+      std::fprintf(stderr, "error: %s\n", std::string(status.message()).c_str());
+      ++failures;
+      continue;
+    }
+    std::printf("%-28s %5d frames  %6.2f s  contact %5.1f%%  -> %s\n", clip->name.c_str(), clip->num_frames,
+                clip->duration(), 100.0 * FootContactRatio(spec, *clip), out_path.c_str());
+  }
+  return failures == 0 ? 0 : 1;
+}
+
+int Inspect(const std::vector<std::string>& files, const HumanoidSpec& spec) {
+  int failures = 0;
+  for (const std::string& file : files) {
+    ImportOptions options;
+    auto clip = ImportMotionFile(file, spec, options);
+    if (!clip.ok()) {
+      std::fprintf(stderr, "error: %s\n", std::string(clip.status().message()).c_str());
+      ++failures;
+      continue;
+    }
+    PrintSummary(spec, *clip, file);
+  }
+  return failures == 0 ? 0 : 1;
+}
+
+}  // namespace
+}  // namespace modskill
+
+int main(int argc, char** argv) {
+  absl::SetProgramUsageMessage(
+      "imports and inspects motion clips.\n"
+      "  modskill-motion import IN... --out DIR [--labels CSV] [--fps 30]\n"
+      "  modskill-motion inspect FILE...\n"
+      "Formats: AMASS/SMPL(-H) .npz, CMU .bvh, DeepMimic humanoid3d .txt, native .msclip");
+  std::vector<char*> args = absl::ParseCommandLine(argc, argv);
+  if (args.size() < 3) {
+    std::fprintf(stderr, "usage: modskill-motion import IN... --out DIR | modskill-motion inspect FILE...\n");
+    return 2;
+  }
+  const std::string command = args[1];
+  const std::vector<std::string> files(args.begin() + 2, args.end());
+  auto spec = modskill::HumanoidSpec::LoadDefault();
+  if (!spec.ok()) {
+    std::fprintf(stderr, "error: %s\n", std::string(spec.status().message()).c_str());
+    return 1;
+  }
+  if (command == "import") return modskill::Import(files, *spec);
+  if (command == "inspect") return modskill::Inspect(files, *spec);
+  std::fprintf(stderr, "error: unknown command '%s' (expected import or inspect)\n", command.c_str());
+  return 2;
+}
