@@ -45,7 +45,17 @@ void ReadReferenceState(const MotionClip& clip, int frame, HumanoidState* state)
 
 void SetSimulationToReference(const HumanoidModel& humanoid, const MotionClip& clip, int frame, mjData* data) {
   const mjModel* m = humanoid.model();
-  mj_resetData(m, data);
+  // A targeted reset instead of mj_resetData, which clears the whole arena: everything the
+  // next mj_step reads besides qpos/qvel is zeroed here.
+  mju_copy(data->qpos, m->qpos0, m->nq);
+  mju_zero(data->qvel, m->nv);
+  mju_zero(data->qacc_warmstart, m->nv);
+  mju_zero(data->qfrc_applied, m->nv);
+  mju_zero(data->xfrc_applied, 6 * m->nbody);
+  if (m->nu > 0) mju_zero(data->ctrl, m->nu);
+  if (m->na > 0) mju_zero(data->act, m->na);
+  data->time = 0;
+  for (int w = 0; w < mjNWARNING; ++w) data->warning[w] = mjWarningStat{0, 0};
   const int bodies = clip.num_bodies, hinges = clip.num_hinges();
   if (!humanoid.options().fixed_root) {
     const Vec3& pos = clip.body_pos[frame * bodies];
@@ -68,7 +78,10 @@ void SetSimulationToReference(const HumanoidModel& humanoid, const MotionClip& c
     data->qpos[qpos0 + h] = clip.dof_pos[frame * hinges + h];
     data->qvel[qvel0 + h] = clip.dof_vel[frame * hinges + h];
   }
-  mj_forward(m, data);
+  // Poses and com velocities for the observation; the next mj_step computes the rest.
+  mj_kinematics(m, data);
+  mj_comPos(m, data);
+  mj_comVel(m, data);
 }
 
 }  // namespace modskill

@@ -29,8 +29,8 @@ struct HumanoidState {
 void ReadSimulatedState(const HumanoidModel& humanoid, const mjData* data, HumanoidState* state);
 void ReadReferenceState(const MotionClip& clip, int frame, HumanoidState* state);
 
-// Sets qpos/qvel to the reference frame (root pose, hinge angles and all velocities) and runs
-// mj_forward.
+// Sets qpos/qvel to the reference frame (root pose, hinge angles and all velocities), clears
+// controls, applied forces and warnings, and updates body poses and velocities.
 void SetSimulationToReference(const HumanoidModel& humanoid, const MotionClip& clip, int frame, mjData* data);
 
 }  // namespace modskill

@@ -63,7 +63,10 @@ std::string BuildHumanoidMjcf(const HumanoidSpec& spec, const PhysicsOptions& op
   absl::StrAppend(&xml, "  <compiler angle=\"radian\" inertiafromgeom=\"true\"/>\n");
   absl::StrAppend(&xml, absl::StrFormat("  <option timestep=\"%.8f\" integrator=\"Euler\" gravity=\"0 0 -9.81\"/>\n",
                                         options.physics_dt()));
-  absl::StrAppend(&xml, "  <size njmax=\"600\" nconmax=\"150\"/>\n");
+  // MuJoCo's default stack is ~18 MB per mjData, and resets and creation touch all of it.
+  // Tracking rollouts peak near 20 contacts and 80 constraint rows using ~30k stack doubles;
+  // these bounds leave a 3x margin, and overflowing contacts only raise a warning.
+  absl::StrAppend(&xml, "  <size njmax=\"250\" nconmax=\"64\" nstack=\"150000\"/>\n");
   absl::StrAppend(&xml, absl::StrFormat("  <default><geom condim=\"3\" friction=\"%.4f 0.005 0.0001\"/></default>\n",
                                         options.friction));
   absl::StrAppend(&xml, "  <worldbody>\n");

@@ -69,7 +69,9 @@ bool TrackingEnv::PhysicsDiverged() const {
   for (int i = 0; i < m->nv; ++i) {
     if (!std::isfinite(data_->qvel[i]) || std::abs(data_->qvel[i]) > 1e3) return true;
   }
-  return data_->warning[mjWARN_BADQACC].number > 0;
+  // MuJoCo resets the state itself on a NaN or huge qpos/qvel/qacc and only leaves a warning.
+  return data_->warning[mjWARN_BADQACC].number > 0 || data_->warning[mjWARN_BADQVEL].number > 0 ||
+         data_->warning[mjWARN_BADQPOS].number > 0;
 }
 
 TrackingErrors TrackingEnv::CurrentTrackingTerms(float* terms) {

@@ -1,0 +1,337 @@
+// The tracking env and the batch: reference state initialization, observation layout, reward,
+// termination, determinism and bad input.
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include <gtest/gtest.h>
+
+#include "server/core/observation.h"
+#include "tests/test_fixtures.h"
+
+namespace modskill {
+namespace {
+
+EnvBatchConfig SmallConfig(int envs = 8, int threads = 1, uint64_t seed = 3) {
+  EnvBatchConfig config;
+  config.num_envs = envs;
+  config.num_threads = threads;
+  config.seed = seed;
+  return config;
+}
+
+TEST(EnvSpecTest, FivePartLayoutHasContiguousPerPartSlices) {
+  auto batch = MakeBatch(SmallConfig());
+  ASSERT_NE(batch, nullptr);
+  const EnvSpec& spec = batch->spec();
+  EXPECT_EQ(spec.obs_size, 934);
+  EXPECT_EQ(spec.self_obs_size, 358);
+  EXPECT_EQ(spec.task_obs_size, 576);
+  EXPECT_EQ(spec.action_size, 69);
+  EXPECT_EQ(spec.amp_obs_per_frame, 232);
+  EXPECT_EQ(spec.amp_obs_size, 2320);
+  ASSERT_EQ(spec.part_action.size(), 5u);
+  const int expected_actions[] = {12, 12, 15, 15, 15};
+  int obs_end = 0, action_end = 0;
+  for (int p = 0; p < 5; ++p) {
+    EXPECT_EQ(spec.part_action[p].size, expected_actions[p]) << p;
+    EXPECT_EQ(spec.part_obs[p].start, obs_end);
+    EXPECT_EQ(spec.part_action[p].start, action_end);
+    obs_end += spec.part_obs[p].size;
+    action_end += spec.part_action[p].size;
+  }
+  EXPECT_EQ(obs_end, spec.obs_size);
+  EXPECT_EQ(action_end, spec.action_size);
+  // Every hinge is driven by exactly one action, and each action belongs to its part's bodies.
+  std::vector<int> seen(69, 0);
+  for (int hinge : spec.action_hinge) ++seen[hinge];
+  for (int h = 0; h < 69; ++h) EXPECT_EQ(seen[h], 1) << h;
+  EXPECT_EQ(spec.joint_names[0], "L_Hip_x");
+  EXPECT_EQ(spec.joint_names[spec.part_action[2].start], "Torso_x");
+}
+
+TEST(EnvSpecTest, EveryShippedLayoutCoversTheBodyOnce) {
+  auto catalog = PartLayoutCatalog::LoadDefault(DefaultSpec());
+  ASSERT_TRUE(catalog.ok()) << catalog.status();
+  for (const char* name : {"5part", "3part", "2part", "1part"}) {
+    auto layout = catalog->Get(name);
+    ASSERT_TRUE(layout.ok()) << name;
+    std::vector<int> order = layout->BodyOrder();
+    std::sort(order.begin(), order.end());
+    for (int b = 0; b < 24; ++b) EXPECT_EQ(order[b], b) << name;
+    EnvBatchConfig config = SmallConfig(2);
+    config.part_layout = name;
+    auto batch = MakeBatch(config);
+    ASSERT_NE(batch, nullptr);
+    EXPECT_EQ(batch->spec().obs_size, 934);
+    EXPECT_EQ(batch->spec().layout.num_parts(), std::atoi(name));
+  }
+  auto unknown = catalog->Get("7part");
+  ASSERT_FALSE(unknown.ok());
+  EXPECT_NE(unknown.status().message().find("7part"), std::string::npos);
+  auto duplicate = MakePartLayout("dup", {{"a", {"Pelvis", "Pelvis"}}}, DefaultSpec());
+  ASSERT_FALSE(duplicate.ok());
+  EXPECT_NE(duplicate.status().message().find("two parts"), std::string::npos);
+  auto missing = MakePartLayout("partial", {{"a", {"Pelvis"}}}, DefaultSpec());
+  ASSERT_FALSE(missing.ok());
+  EXPECT_NE(missing.status().message().find("L_Hip"), std::string::npos);
+  auto bad_body = MakePartLayout("typo", {{"a", {"Pelvsi"}}}, DefaultSpec());
+  ASSERT_FALSE(bad_body.ok());
+  EXPECT_NE(bad_body.status().message().find("Pelvsi"), std::string::npos);
+}
+
+TEST(TrackingEnvTest, ResetOntoReferenceHasZeroDeltasAndMaximalReward) {
+  auto batch = MakeBatch(SmallConfig(1));
+  ASSERT_NE(batch, nullptr);
+  const MotionLibrary& motions = batch->motions();
+  for (const char* name : {"deepmimic_walk", "cmu_02_01", "deepmimic_backflip"}) {
+    const int clip = motions.Find(name);
+    ASSERT_GE(clip, 0);
+    batch->env(0).ResetTo(clip, 10, batch->row(0));
+    float terms[kNumRewardTerms] = {};
+    const TrackingErrors errors = batch->env(0).CurrentTrackingTerms(terms);
+    EXPECT_LT(errors.max_body_distance, 1e-9) << name;
+    EXPECT_NEAR(terms[kRewardPos] + terms[kRewardRot] + terms[kRewardVel] + terms[kRewardAngVel], 1.0, 1e-6) << name;
+    // The task part of the observation against the same frame is all zero deltas.
+    HumanoidState sim, ref;
+    sim.Resize(24, 69);
+    ref.Resize(24, 69);
+    ReadSimulatedState(batch->humanoid(), batch->env(0).data(), &sim);
+    ReadReferenceState(motions.clip(clip), 10, &ref);
+    std::vector<float> obs(batch->spec().obs_size);
+    WriteTrackingObservation(batch->spec(), sim, ref, obs.data());
+    for (int body = 0; body < 24; ++body) {
+      const int self = body == 0 ? kSelfFeaturesRoot : kSelfFeaturesPerBody;
+      const float* task = &obs[batch->spec().body_obs_start[body] + self];
+      for (int k = 0; k < 3; ++k) EXPECT_NEAR(task[k], 0.f, 1e-6) << name << " dpos body " << body;
+      // Identity rotation in tangent-normal form: (1, 0, 0, 0, 0, 1).
+      const float identity[6] = {1, 0, 0, 0, 0, 1};
+      for (int k = 0; k < 6; ++k) EXPECT_NEAR(task[3 + k], identity[k], 1e-6) << name << " drot body " << body;
+      for (int k = 9; k < 15; ++k) EXPECT_NEAR(task[k], 0.f, 1e-5) << name << " dvel body " << body;
+    }
+    EXPECT_EQ(batch->buffers().clip_id[0], clip);
+    EXPECT_EQ(batch->buffers().frame[0], 10);
+  }
+}
+
+TEST(TrackingEnvTest, TrackingReferenceActionsKeepsTheEpisodeAlive) {
+  auto batch = MakeBatch(SmallConfig(1));
+  ASSERT_NE(batch, nullptr);
+  const int clip = batch->motions().Find("deepmimic_walk");
+  batch->env(0).ResetTo(clip, 0, batch->row(0));
+  for (int s = 0; s < 5; ++s) {
+    ASSERT_TRUE(batch->Step(ReferenceActions(*batch)).ok());
+    EXPECT_EQ(batch->buffers().done[0], 0) << s;
+    EXPECT_GT(batch->buffers().reward[0], 0.3f) << s;
+    EXPECT_LT(batch->buffers().max_body_error[0], 0.25f) << s;
+  }
+  EXPECT_EQ(batch->buffers().frame[0], 5);
+}
+
+TEST(TrackingEnvTest, PushingABodyAwayTerminatesInTrainingMode) {
+  auto batch = MakeBatch(SmallConfig(1));
+  ASSERT_NE(batch, nullptr);
+  const int clip = batch->motions().Find("deepmimic_walk");
+  batch->env(0).ResetTo(clip, 5, batch->row(0));
+  // Swing the left shoulder far from the reference: the hand ends up > 0.25 m away.
+  const int shoulder = DefaultSpec().BodyIndex("L_Shoulder");
+  batch->env(0).mutable_data()->qpos[7 + 3 * (shoulder - 1) + 2] += 1.5;
+  batch->env(0).RefreshObservation(batch->row(0));
+  ASSERT_TRUE(batch->Step(ReferenceActions(*batch)).ok());
+  EXPECT_EQ(batch->buffers().done[0], 1);
+  EXPECT_EQ(batch->buffers().truncated[0], 0);
+  EXPECT_GT(batch->buffers().max_body_error[0], 0.25f);
+  EXPECT_EQ(batch->buffers().ended_clip_id[0], clip);
+  EXPECT_EQ(batch->buffers().ended_frame[0], 6);
+
+  // The same push in evaluation mode (mean body error > 0.5 m) does not end the episode...
+  EnvBatchConfig eval = SmallConfig(1);
+  eval.env.termination = TerminationMode::kEvaluation;
+  eval.env.termination_distance = 0.5;
+  auto evaluation = MakeBatch(eval);
+  evaluation->env(0).ResetTo(clip, 5, evaluation->row(0));
+  evaluation->env(0).mutable_data()->qpos[7 + 3 * (shoulder - 1) + 2] += 1.5;
+  evaluation->env(0).RefreshObservation(evaluation->row(0));
+  ASSERT_TRUE(evaluation->Step(ReferenceActions(*evaluation)).ok());
+  EXPECT_EQ(evaluation->buffers().done[0], 0);
+  // ...but moving the whole body a meter away does.
+  evaluation->env(0).mutable_data()->qpos[0] += 1.0;
+  evaluation->env(0).RefreshObservation(evaluation->row(0));
+  ASSERT_TRUE(evaluation->Step(ReferenceActions(*evaluation)).ok());
+  EXPECT_EQ(evaluation->buffers().done[0], 1);
+  EXPECT_EQ(evaluation->buffers().truncated[0], 0);
+}
+
+TEST(TrackingEnvTest, ClipEndTruncatesAndResets) {
+  EnvBatchConfig config = SmallConfig(1);
+  config.env.termination = TerminationMode::kNone;
+  auto batch = MakeBatch(config);
+  const int clip = batch->motions().Find("deepmimic_walk");
+  const int frames = batch->motions().clip(clip).num_frames;
+  batch->env(0).ResetTo(clip, frames - 4, batch->row(0));
+  for (int s = 0; s < 2; ++s) {
+    ASSERT_TRUE(batch->Step(ReferenceActions(*batch)).ok());
+    EXPECT_EQ(batch->buffers().done[0], 0);
+  }
+  ASSERT_TRUE(batch->Step(ReferenceActions(*batch)).ok());
+  EXPECT_EQ(batch->buffers().done[0], 1);
+  EXPECT_EQ(batch->buffers().truncated[0], 1);
+  EXPECT_EQ(batch->buffers().ended_frame[0], frames - 1);
+}
+
+TEST(TrackingEnvTest, EnergyPenaltyIsOffRightAfterResetThenNegative) {
+  auto batch = MakeBatch(SmallConfig(1));
+  const int clip = batch->motions().Find("deepmimic_walk");
+  batch->env(0).ResetTo(clip, 5, batch->row(0));
+  std::vector<float> energy;
+  for (int s = 0; s < 5; ++s) {
+    ASSERT_TRUE(batch->Step(ReferenceActions(*batch)).ok());
+    energy.push_back(batch->buffers().reward_terms[kRewardEnergy]);
+    ASSERT_EQ(batch->buffers().done[0], 0) << s;
+  }
+  EXPECT_EQ(energy[0], 0.f);
+  EXPECT_EQ(energy[2], 0.f);
+  EXPECT_LT(energy[3], 0.f);
+  EXPECT_LT(energy[4], 0.f);
+}
+
+TEST(TrackingEnvTest, AmpHistoryShiftsByOneFramePerStep) {
+  auto batch = MakeBatch(SmallConfig(1));
+  const int clip = batch->motions().Find("deepmimic_walk");
+  batch->env(0).ResetTo(clip, 12, batch->row(0));
+  const int per_frame = batch->spec().amp_obs_per_frame;
+  const std::vector<float> before = batch->buffers().amp_obs;
+  // At reset the history is the reference's own past: frames 12, 11, 10, ...
+  EXPECT_NE(std::memcmp(&before[0], &before[per_frame], sizeof(float) * per_frame), 0);
+  ASSERT_TRUE(batch->Step(ReferenceActions(*batch)).ok());
+  ASSERT_EQ(batch->buffers().done[0], 0);
+  const std::vector<float>& after = batch->buffers().amp_obs;
+  for (int k = 0; k + 1 < kAmpHistory; ++k) {
+    EXPECT_EQ(std::memcmp(&after[(k + 1) * per_frame], &before[k * per_frame], sizeof(float) * per_frame), 0) << k;
+  }
+  // The newest frame is the simulated state: root height first, near the reference's.
+  EXPECT_NEAR(after[0], batch->motions().clip(clip).body_pos[13 * 24].z(), 0.05);
+}
+
+TEST(EnvBatchTest, SameSeedGivesIdenticalBatchesForAnyThreadCount) {
+  auto run = [](int threads) {
+    auto batch = MakeBatch(SmallConfig(16, threads, 42));
+    batch->Reset();
+    std::mt19937 rng(9);
+    std::uniform_real_distribution<float> uniform(-1.f, 1.f);
+    std::vector<float> trace;
+    for (int s = 0; s < 40; ++s) {
+      std::vector<float> actions = ReferenceActions(*batch);
+      for (float& a : actions) a = std::clamp(a + 0.3f * uniform(rng), -1.f, 1.f);
+      EXPECT_TRUE(batch->Step(actions).ok());
+      const BatchBuffers& out = batch->buffers();
+      trace.insert(trace.end(), out.obs.begin(), out.obs.end());
+      trace.insert(trace.end(), out.reward.begin(), out.reward.end());
+      trace.insert(trace.end(), out.amp_obs.begin(), out.amp_obs.end());
+      for (int i = 0; i < batch->num_envs(); ++i) {
+        trace.push_back(static_cast<float>(out.done[i]));
+        trace.push_back(static_cast<float>(out.clip_id[i]));
+        trace.push_back(static_cast<float>(out.frame[i]));
+      }
+    }
+    return trace;
+  };
+  const std::vector<float> first = run(1);
+  const std::vector<float> second = run(1);
+  const std::vector<float> threaded = run(2);
+  ASSERT_EQ(first.size(), second.size());
+  EXPECT_EQ(std::memcmp(first.data(), second.data(), first.size() * sizeof(float)), 0);
+  ASSERT_EQ(first.size(), threaded.size());
+  EXPECT_EQ(std::memcmp(first.data(), threaded.data(), first.size() * sizeof(float)), 0);
+  // A different seed samples different clips and frames.
+  auto other = MakeBatch(SmallConfig(16, 1, 43));
+  other->Reset();
+  auto base = MakeBatch(SmallConfig(16, 1, 42));
+  base->Reset();
+  EXPECT_NE(other->buffers().frame, base->buffers().frame);
+}
+
+TEST(EnvBatchTest, BadActionsAreRejectedBeforeAnyEnvMoves) {
+  auto batch = MakeBatch(SmallConfig(4));
+  batch->Reset();
+  const std::vector<float> obs_before = batch->buffers().obs;
+  std::vector<float> actions(4 * 69, 0.f);
+  auto short_batch = batch->Step(absl::MakeConstSpan(actions.data(), actions.size() - 1));
+  ASSERT_FALSE(short_batch.ok());
+  EXPECT_EQ(short_batch.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(short_batch.message().find("actions"), std::string::npos);
+  EXPECT_NE(short_batch.message().find("276"), std::string::npos);
+  actions[2 * 69 + 5] = std::numeric_limits<float>::quiet_NaN();
+  auto nan = batch->Step(actions);
+  ASSERT_FALSE(nan.ok());
+  EXPECT_NE(nan.message().find("row 2"), std::string::npos);
+  actions[2 * 69 + 5] = 0.f;
+  actions[3 * 69] = std::numeric_limits<float>::infinity();
+  auto inf = batch->Step(actions);
+  ASSERT_FALSE(inf.ok());
+  EXPECT_NE(inf.message().find("row 3"), std::string::npos);
+  EXPECT_EQ(batch->buffers().obs, obs_before);
+  EXPECT_EQ(batch->steps(), 0);
+}
+
+TEST(EnvBatchTest, PhysicsBlowUpResetsOnlyThatEnvAndIsCounted) {
+  auto clean = MakeBatch(SmallConfig(4, 1, 11));
+  auto broken = MakeBatch(SmallConfig(4, 1, 11));
+  clean->Reset();
+  broken->Reset();
+  broken->env(1).mutable_data()->qvel[10] = std::numeric_limits<double>::quiet_NaN();
+  const std::vector<float> actions = ReferenceActions(*clean);
+  ASSERT_TRUE(clean->Step(actions).ok());
+  ASSERT_TRUE(broken->Step(actions).ok());
+  EXPECT_EQ(broken->physics_resets(), 1);
+  EXPECT_EQ(clean->physics_resets(), 0);
+  EXPECT_EQ(broken->buffers().done[1], 1);
+  EXPECT_EQ(broken->buffers().reward[1], 0.f);
+  for (float v : std::vector<float>(broken->buffers().obs.begin() + 934, broken->buffers().obs.begin() + 2 * 934)) {
+    ASSERT_TRUE(std::isfinite(v));
+  }
+  const int obs = clean->spec().obs_size;
+  for (int i : {0, 2, 3}) {
+    EXPECT_EQ(std::memcmp(&clean->buffers().obs[i * obs], &broken->buffers().obs[i * obs], obs * sizeof(float)), 0) << i;
+    EXPECT_EQ(clean->buffers().reward[i], broken->buffers().reward[i]) << i;
+  }
+}
+
+TEST(EnvBatchTest, BadConfigsAreErrors) {
+  EnvBatchConfig config = SmallConfig(0);
+  auto zero = EnvBatch::Create(config, DefaultMotions());
+  ASSERT_FALSE(zero.ok());
+  EXPECT_NE(zero.status().message().find("num_envs"), std::string::npos);
+  config = SmallConfig(2, 0);
+  EXPECT_FALSE(EnvBatch::Create(config, DefaultMotions()).ok());
+  config = SmallConfig(2);
+  config.part_layout = "9part";
+  auto layout = EnvBatch::Create(config, DefaultMotions());
+  ASSERT_FALSE(layout.ok());
+  EXPECT_NE(layout.status().message().find("9part"), std::string::npos);
+  config = SmallConfig(2);
+  config.physics.substeps = 0;
+  auto substeps = EnvBatch::Create(config, DefaultMotions());
+  ASSERT_FALSE(substeps.ok());
+  EXPECT_NE(substeps.status().message().find("substeps"), std::string::npos);
+  EXPECT_FALSE(EnvBatch::Create(SmallConfig(2), std::make_shared<const MotionLibrary>()).ok());
+}
+
+TEST(ClipSamplerTest, FollowsWeightsAndRejectsBadOnes) {
+  ClipSampler sampler(3);
+  ASSERT_TRUE(sampler.SetWeights(std::vector<double>{0.0, 3.0, 1.0}).ok());
+  std::mt19937_64 rng(1);
+  int counts[3] = {};
+  for (int k = 0; k < 4000; ++k) ++counts[sampler.Sample(rng)];
+  EXPECT_EQ(counts[0], 0);
+  EXPECT_NEAR(counts[1] / 4000.0, 0.75, 0.03);
+  EXPECT_FALSE(sampler.SetWeights(std::vector<double>{1.0, 1.0}).ok());
+  EXPECT_FALSE(sampler.SetWeights(std::vector<double>{1.0, -1.0, 1.0}).ok());
+  EXPECT_FALSE(sampler.SetWeights(std::vector<double>{0.0, 0.0, 0.0}).ok());
+  auto nan = sampler.SetWeights(std::vector<double>{1.0, std::nan(""), 1.0});
+  ASSERT_FALSE(nan.ok());
+  EXPECT_NE(nan.message().find("weights[1]"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace modskill
