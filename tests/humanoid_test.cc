@@ -73,15 +73,35 @@ TEST(HumanoidSpecTest, ClipForwardKinematicsMatchesMujocoForRandomPoses) {
   ASSERT_TRUE(humanoid.ok());
   mjData* d = mj_makeData((*humanoid)->model());
   SetSimulationToReference(**humanoid, clip, 0, d);
+  // MuJoCo's own kinematics of that state against the clip's (ours, computed without MuJoCo).
+  mj_forward((*humanoid)->model(), d);
+  for (int b = 0; b < 24; ++b) {
+    const int id = b + 1;
+    const Vec3 pos(d->xpos[3 * id], d->xpos[3 * id + 1], d->xpos[3 * id + 2]);
+    const Quat rot(d->xquat[4 * id], d->xquat[4 * id + 1], d->xquat[4 * id + 2], d->xquat[4 * id + 3]);
+    mjtNum velocity[6];
+    mj_objectVelocity((*humanoid)->model(), d, mjOBJ_XBODY, id, velocity, 0);
+    EXPECT_LT((pos - clip.body_pos[b]).norm(), 1e-9) << b;
+    EXPECT_LT(RotationAngle(rot * clip.body_rot[b].conjugate()), 1e-6) << b;
+    EXPECT_LT((Vec3(velocity[3], velocity[4], velocity[5]) - clip.body_vel[b]).norm(), 1e-6) << b;
+    EXPECT_LT((Vec3(velocity[0], velocity[1], velocity[2]) - clip.body_ang_vel[b]).norm(), 1e-6) << b;
+  }
+  // And the simulated-state reader (the step loop's forward kinematics) against MuJoCo after
+  // real stepping, with contacts and nonzero velocities.
+  std::vector<double> targets(69, 0.3);
+  PdController pd(**humanoid);
+  for (int s = 0; s < 5; ++s) pd.Step(targets.data(), d);
+  mj_forward((*humanoid)->model(), d);
   HumanoidState state;
   state.Resize(24, 69);
   ReadSimulatedState(**humanoid, d, &state);
   for (int b = 0; b < 24; ++b) {
-    EXPECT_LT((state.body_pos[b] - clip.body_pos[b]).norm(), 1e-9) << b;
-    EXPECT_LT(RotationAngle(state.body_rot[b] * clip.body_rot[b].conjugate()), 1e-6) << b;
-    // Velocities propagated from the hinge rates agree with MuJoCo's.
-    EXPECT_LT((state.body_vel[b] - clip.body_vel[b]).norm(), 1e-6) << b;
-    EXPECT_LT((state.body_ang_vel[b] - clip.body_ang_vel[b]).norm(), 1e-6) << b;
+    const int id = b + 1;
+    mjtNum velocity[6];
+    mj_objectVelocity((*humanoid)->model(), d, mjOBJ_XBODY, id, velocity, 0);
+    EXPECT_LT((state.body_pos[b] - Vec3(d->xpos[3 * id], d->xpos[3 * id + 1], d->xpos[3 * id + 2])).norm(), 1e-9) << b;
+    EXPECT_LT((state.body_vel[b] - Vec3(velocity[3], velocity[4], velocity[5])).norm(), 1e-6) << b;
+    EXPECT_LT((state.body_ang_vel[b] - Vec3(velocity[0], velocity[1], velocity[2])).norm(), 1e-6) << b;
   }
   mj_deleteData(d);
 }

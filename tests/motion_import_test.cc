@@ -349,12 +349,7 @@ TEST(AmassSemantics, UprightRootGivesRestPoseTurnedByYaw) {
 // whatever the root orientation (smplx lbs.batch_rigid_transform: the root transform is
 // [R_root | J0]; PHC's AMASS conversion uses trans + J0 as well). Turning, leaning or lying
 // down on the spot therefore must not move the pelvis.
-//
-// DISABLED: fails. ImportAmassNpz (server/core/amass_import.cc) sets
-// root_pos = R_root * J0 + trans instead of J0 + trans, so the pelvis swings around by
-// |J0| ~ 0.23 m as the root orientation changes (frames below: pelvis positions differ by up
-// to ~0.3 m; with a pure yaw turn on the spot it circles with radius ~2.8 cm).
-TEST(AmassSemantics, DISABLED_RootRotationPivotsAboutThePelvis) {
+TEST(AmassSemantics, RootRotationPivotsAboutThePelvis) {
   const Quat upright(Eigen::AngleAxisd(kPi / 2, Vec3::UnitX()));
   const std::vector<Quat> roots = {
       upright,
@@ -620,13 +615,7 @@ TEST(BadNpz, MissingFile) {
 }
 
 // A 0-d string where the frame rate belongs (as a careless export writes str(fps)).
-// DISABLED: crashes the process. ImportAmassNpz (server/core/amass_import.cc) checks
-// `rate->size() != 1` (1 for any 0-d array) and then reads `rate->data[0]`, but ReadNpz leaves
-// `data` empty for '<U'/'|S' string arrays: an out-of-bounds read of an empty vector
-// (segfault here). The same happens for string-typed 'poses' or 'trans' members: the
-// finiteness loops read poses->data[i] for i < poses->size() while data is empty. Fix: reject
-// members whose dtype is not numeric (data.size() != size()).
-TEST(BadNpz, DISABLED_StringFramerate) {
+TEST(BadNpz, StringFramerate) {
   const std::string path = TempPath("a.npz");
   const int n = 4;
   NpzWriter writer;
@@ -637,12 +626,14 @@ TEST(BadNpz, DISABLED_StringFramerate) {
   ExpectImportError(path, {"'mocap_framerate'"});
 }
 
-// The same for a string-typed 'poses' of the right shape (see DISABLED_StringFramerate).
-TEST(BadNpz, DISABLED_StringPoses) {
+// The same for a string-typed 'poses' of the right shape.
+TEST(BadNpz, StringPoses) {
   const std::string path = TempPath("a.npz");
   const int n = 4;
   NpzWriter writer;
-  writer.AddRawMember("poses.npy", NpzWriter::MakeNpy("<U1", false, {n, 72}, std::string(4 * 72 * n, 'a')));
+  std::string data;
+  for (int i = 0; i < 72 * n; ++i) data += std::string("0\0\0\0", 4);  // '0' as UTF-32LE
+  writer.AddRawMember("poses.npy", NpzWriter::MakeNpy("<U1", false, {n, 72}, data));
   writer.AddF64("trans", {n, 3}, std::vector<double>(3 * n, 0.0));
   writer.AddF64("mocap_framerate", {}, {60.0});
   ASSERT_TRUE(writer.Write(path, false));

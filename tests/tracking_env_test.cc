@@ -182,7 +182,7 @@ TEST(TrackingEnvTest, ClipEndTruncatesAndResets) {
 TEST(TrackingEnvTest, EnergyPenaltyIsOffRightAfterResetThenNegative) {
   auto batch = MakeBatch(SmallConfig(1));
   const int clip = batch->motions().Find("deepmimic_walk");
-  batch->env(0).ResetTo(clip, 5, batch->row(0));
+  batch->env(0).ResetTo(clip, 0, batch->row(0));
   std::vector<float> energy;
   for (int s = 0; s < 5; ++s) {
     ASSERT_TRUE(batch->Step(ReferenceActions(*batch)).ok());

@@ -16,7 +16,8 @@ constexpr const char* kSmplJointOrder[24] = {
     "R_Ankle",  "Chest",    "L_Toe",      "R_Toe",      "Neck",    "L_Thorax", "R_Thorax", "Head",
     "L_Shoulder", "R_Shoulder", "L_Elbow", "R_Elbow",  "L_Wrist", "R_Wrist", "L_Hand",  "R_Hand"};
 
-// Pelvis joint of the SMPL neutral template (y-up): the world pelvis is R_root * J0 + trans.
+// Pelvis joint of the SMPL neutral template (y-up). SMPL rotates the body about this joint, so
+// the world pelvis is J0 + trans whatever the root rotation.
 const Vec3 kTemplatePelvisYup(-0.0018, -0.2233, 0.0282);
 
 }  // namespace
@@ -35,6 +36,13 @@ absl::StatusOr<MotionClip> ImportAmassNpz(const std::string& path, const Humanoi
   if (poses == nullptr) return absl::InvalidArgumentError(absl::StrCat(path, ": missing field 'poses'"));
   if (trans == nullptr) return absl::InvalidArgumentError(absl::StrCat(path, ": missing field 'trans'"));
   if (rate == nullptr) return absl::InvalidArgumentError(absl::StrCat(path, ": missing field 'mocap_framerate'"));
+  // Text members (dtype <U or |S) carry no numbers.
+  for (const auto& [field, array] : {std::pair<const char*, const NpyArray*>{"poses", poses}, {"trans", trans},
+                                     {"mocap_framerate", rate}}) {
+    if (array->data.size() != static_cast<size_t>(array->size())) {
+      return absl::InvalidArgumentError(absl::StrCat(path, ": field '", field, "' must be numeric, got dtype ", array->dtype));
+    }
+  }
   if (poses->shape.size() != 2 || (poses->shape[1] != 72 && poses->shape[1] != 156 && poses->shape[1] != 165)) {
     return absl::InvalidArgumentError(absl::StrCat(path, ": field 'poses' must be N x 72 (SMPL), N x 156 (SMPL-H) or "
                                                    "N x 165 (SMPL-X), got ", poses->shape.size(), "-d shape"));
@@ -84,8 +92,7 @@ absl::StatusOr<MotionClip> ImportAmassNpz(const std::string& path, const Humanoi
           (j == 0 ? smpl * p_quat.conjugate() : p_quat * smpl * p_quat.conjugate()).normalized();
     }
     const Vec3 t(trans->data[3 * f], trans->data[3 * f + 1], trans->data[3 * f + 2]);
-    const Quat root_smpl = QuatFromRotationVector(Vec3(row[0], row[1], row[2]));
-    clip.root_pos[f] = root_smpl * kTemplatePelvisYup + t;
+    clip.root_pos[f] = kTemplatePelvisYup + t;
   }
   return clip;
 }

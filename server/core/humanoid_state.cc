@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "server/core/body_kinematics.h"
+
 namespace modskill {
 
 void HumanoidState::Resize(int num_bodies, int num_hinges) {
@@ -14,23 +16,22 @@ void HumanoidState::Resize(int num_bodies, int num_hinges) {
 }
 
 void ReadSimulatedState(const HumanoidModel& humanoid, const mjData* data, HumanoidState* state) {
-  const mjModel* m = humanoid.model();
-  for (int b = 0; b < humanoid.num_bodies(); ++b) {
-    const int id = humanoid.mj_body_id(b);
-    const mjtNum* p = data->xpos + 3 * id;
-    const mjtNum* q = data->xquat + 4 * id;
-    state->body_pos[b] = Vec3(p[0], p[1], p[2]);
-    state->body_rot[b] = Quat(q[0], q[1], q[2], q[3]);
-    mjtNum velocity[6];  // [angular, linear] at the body frame origin, world orientation
-    mj_objectVelocity(m, data, mjOBJ_XBODY, id, velocity, 0);
-    state->body_ang_vel[b] = Vec3(velocity[0], velocity[1], velocity[2]);
-    state->body_vel[b] = Vec3(velocity[3], velocity[4], velocity[5]);
+  RootState root;
+  if (humanoid.options().fixed_root) {
+    root.pos = Vec3(0, 0, humanoid.options().fixed_root_height);
+  } else {
+    const mjtNum* q = data->qpos;
+    root.pos = Vec3(q[0], q[1], q[2]);
+    root.rot = Quat(q[3], q[4], q[5], q[6]).normalized();
+    root.vel = Vec3(data->qvel[0], data->qvel[1], data->qvel[2]);
+    // MuJoCo's free joint keeps its angular velocity in the body frame.
+    root.ang_vel = root.rot * Vec3(data->qvel[3], data->qvel[4], data->qvel[5]);
   }
   const int qpos0 = humanoid.hinge_qpos_start(), qvel0 = humanoid.hinge_qvel_start();
-  for (int h = 0; h < humanoid.num_hinges(); ++h) {
-    state->dof_pos[h] = data->qpos[qpos0 + h];
-    state->dof_vel[h] = data->qvel[qvel0 + h];
-  }
+  std::copy_n(data->qpos + qpos0, humanoid.num_hinges(), state->dof_pos.begin());
+  std::copy_n(data->qvel + qvel0, humanoid.num_hinges(), state->dof_vel.begin());
+  ComputeBodyKinematics(humanoid.spec(), root, state->dof_pos.data(), state->dof_vel.data(), state->body_pos.data(),
+                        state->body_rot.data(), state->body_vel.data(), state->body_ang_vel.data());
 }
 
 void ReadReferenceState(const MotionClip& clip, int frame, HumanoidState* state) {
@@ -78,10 +79,6 @@ void SetSimulationToReference(const HumanoidModel& humanoid, const MotionClip& c
     data->qpos[qpos0 + h] = clip.dof_pos[frame * hinges + h];
     data->qvel[qvel0 + h] = clip.dof_vel[frame * hinges + h];
   }
-  // Poses and com velocities for the observation; the next mj_step computes the rest.
-  mj_kinematics(m, data);
-  mj_comPos(m, data);
-  mj_comVel(m, data);
 }
 
 }  // namespace modskill

@@ -24,13 +24,12 @@ struct HumanoidState {
   void Resize(int num_bodies, int num_hinges);
 };
 
-// From mjData; needs kinematics and com velocities to be current (mj_kinematics, mj_comPos,
-// mj_comVel or mj_forward).
+// From mjData's qpos and qvel alone (our own forward kinematics: no mj_kinematics needed).
 void ReadSimulatedState(const HumanoidModel& humanoid, const mjData* data, HumanoidState* state);
 void ReadReferenceState(const MotionClip& clip, int frame, HumanoidState* state);
 
-// Sets qpos/qvel to the reference frame (root pose, hinge angles and all velocities), clears
-// controls, applied forces and warnings, and updates body poses and velocities.
+// Sets qpos/qvel to the reference frame (root pose, hinge angles and all velocities) and clears
+// controls, applied forces and warnings; the next mj_step computes everything else.
 void SetSimulationToReference(const HumanoidModel& humanoid, const MotionClip& clip, int frame, mjData* data);
 
 }  // namespace modskill

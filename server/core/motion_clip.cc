@@ -1,5 +1,7 @@
 #include "server/core/motion_clip.h"
 
+#include "server/core/body_kinematics.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -82,23 +84,14 @@ absl::Status ComputeClipKinematics(const HumanoidSpec& spec, MotionClip* clip) {
   clip->dof_pos.assign(frames * hinges, 0.0);
   clip->dof_vel.assign(frames * hinges, 0.0);
   for (int f = 0; f < frames; ++f) {
-    for (int b = 0; b < bodies; ++b) {
-      const int i = f * bodies + b;
-      const Quat local = clip->local_rot[i].normalized();
-      const int parent = spec.body(b).parent;
-      if (parent < 0) {
-        clip->body_pos[i] = clip->root_pos[f];
-        clip->body_rot[i] = local;
-      } else {
-        const int p = f * bodies + parent;
-        clip->body_pos[i] = clip->body_pos[p] + clip->body_rot[p] * spec.body(b).offset;
-        clip->body_rot[i] = (clip->body_rot[p] * local).normalized();
-        const Vec3 angles = IntrinsicXyzFromQuat(local);
-        for (int a = 0; a < 3; ++a) clip->dof_pos[f * hinges + 3 * (b - 1) + a] = angles[a];
-      }
+    for (int b = 1; b < bodies; ++b) {
+      const Vec3 angles = IntrinsicXyzFromQuat(clip->local(f, b));
+      for (int a = 0; a < 3; ++a) clip->dof_pos[f * hinges + 3 * (b - 1) + a] = angles[a];
     }
   }
-  // Central differences inside, one-sided at the ends.
+  // Root velocities and hinge rates from central differences (one-sided at the ends); every
+  // other body's velocity is propagated from them exactly as MuJoCo does, so a simulation set
+  // to a frame reports the reference's own velocities.
   const double dt = 1.0 / clip->fps;
   for (int f = 0; f < frames; ++f) {
     const int f0 = std::max(0, f - 1), f1 = std::min(frames - 1, f + 1);
@@ -106,22 +99,14 @@ absl::Status ComputeClipKinematics(const HumanoidSpec& spec, MotionClip* clip) {
     for (int h = 0; h < hinges; ++h) {
       clip->dof_vel[f * hinges + h] = WrapAngle(clip->dof_pos[f1 * hinges + h] - clip->dof_pos[f0 * hinges + h]) / span;
     }
-    // The root's velocities come from differences; every other body's are propagated from
-    // its parent and its hinge rates, exactly as MuJoCo does, so that a simulation set to
-    // this frame reports the same body velocities as the reference.
+    RootState root;
+    root.pos = clip->root_pos[f];
+    root.rot = clip->local(f, 0).normalized();
+    root.vel = (clip->root_pos[f1] - clip->root_pos[f0]) / span;
+    root.ang_vel = AngularVelocity(clip->local(f0, 0).normalized(), clip->local(f1, 0).normalized(), span);
     const int r = f * bodies;
-    clip->body_vel[r] = (clip->body_pos[f1 * bodies] - clip->body_pos[f0 * bodies]) / span;
-    clip->body_ang_vel[r] = AngularVelocity(clip->body_rot[f0 * bodies], clip->body_rot[f1 * bodies], span);
-    for (int b = 1; b < bodies; ++b) {
-      const int i = r + b, p = r + spec.body(b).parent;
-      const double* angle = &clip->dof_pos[f * hinges + 3 * (b - 1)];
-      const double* rate = &clip->dof_vel[f * hinges + 3 * (b - 1)];
-      const Quat rx(Eigen::AngleAxisd(angle[0], Vec3::UnitX()));
-      const Quat ry(Eigen::AngleAxisd(angle[1], Vec3::UnitY()));
-      const Vec3 relative = rate[0] * Vec3::UnitX() + rx * (rate[1] * Vec3::UnitY() + ry * (rate[2] * Vec3::UnitZ()));
-      clip->body_ang_vel[i] = clip->body_ang_vel[p] + clip->body_rot[p] * relative;
-      clip->body_vel[i] = clip->body_vel[p] + clip->body_ang_vel[p].cross(clip->body_pos[i] - clip->body_pos[p]);
-    }
+    ComputeBodyKinematics(spec, root, &clip->dof_pos[f * hinges], &clip->dof_vel[f * hinges], &clip->body_pos[r],
+                          &clip->body_rot[r], &clip->body_vel[r], &clip->body_ang_vel[r]);
   }
   return absl::OkStatus();
 }

@@ -47,19 +47,7 @@ void TrackingEnv::ResetTo(int clip, int frame, EnvRow row) {
   WriteObservation(row);
 }
 
-void TrackingEnv::UpdateKinematics() {
-  const mjModel* m = context_->humanoid->model();
-  // mj_step leaves positions-dependent quantities one step behind; refresh what the
-  // observation reads (body poses and com velocities) without a full mj_forward.
-  mj_kinematics(m, data_);
-  mj_comPos(m, data_);
-  mj_comVel(m, data_);
-}
-
-void TrackingEnv::RefreshObservation(EnvRow row) {
-  mj_forward(context_->humanoid->model(), data_);
-  WriteObservation(row);
-}
+void TrackingEnv::RefreshObservation(EnvRow row) { WriteObservation(row); }
 
 bool TrackingEnv::PhysicsDiverged() const {
   const mjModel* m = context_->humanoid->model();
@@ -111,7 +99,6 @@ void TrackingEnv::Step(const float* action, EnvRow row) {
     Reset(row);
     return;
   }
-  UpdateKinematics();
   const TrackingErrors errors = CurrentTrackingTerms(terms);
   terms[kRewardEnergy] = episode_steps_ > config.reward.energy_free_steps
                              ? static_cast<float>(-config.reward.energy_coefficient * power)

@@ -71,14 +71,13 @@ class TrackingEnv {
   int64_t physics_resets() const { return physics_resets_; }
   // Reward terms and errors of the current state against the reference at the current frame.
   TrackingErrors CurrentTrackingTerms(float* terms);
-  // Recomputes kinematics from qpos/qvel and rewrites the row's observation (after external
-  // changes to the state, such as a push).
+  // Rewrites the row's observation from qpos/qvel (after external changes to the state, such
+  // as a push).
   void RefreshObservation(EnvRow row);
 
  private:
   void WriteObservation(EnvRow row);
   bool PhysicsDiverged() const;
-  void UpdateKinematics();
 
   const EnvContext* context_;
   mjData* data_;
