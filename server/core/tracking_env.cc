@@ -36,6 +36,7 @@ void TrackingEnv::ResetTo(int clip, int frame, EnvRow row) {
   clip_ = clip;
   frame_ = std::clamp(frame, 0, motion.num_frames - 2);
   episode_steps_ = 0;
+  finished_ = false;
   SetSimulationToReference(*context_->humanoid, motion, frame_, data_);
   // AMP history starts as the reference's own recent past.
   const int per_frame = context_->spec->amp_obs_per_frame;
@@ -69,6 +70,11 @@ TrackingErrors TrackingEnv::CurrentTrackingTerms(float* terms) {
 }
 
 void TrackingEnv::Step(const float* action, EnvRow row) {
+  if (finished_) {
+    row.buffers->done[row.index] = 1;
+    row.buffers->reward[row.index] = 0.f;
+    return;
+  }
   const HumanoidModel& humanoid = *context_->humanoid;
   const EnvSpec& spec = *context_->spec;
   const TrackingEnvConfig& config = context_->config;
@@ -96,7 +102,7 @@ void TrackingEnv::Step(const float* action, EnvRow row) {
     out.ended_frame[i] = frame_;
     out.max_body_error[i] = std::numeric_limits<float>::infinity();
     out.mean_body_error[i] = std::numeric_limits<float>::infinity();
-    Reset(row);
+    EndEpisode(row);
     return;
   }
   const TrackingErrors errors = CurrentTrackingTerms(terms);
@@ -128,7 +134,7 @@ void TrackingEnv::Step(const float* action, EnvRow row) {
   if (terminated || truncated) {
     out.ended_clip_id[i] = clip_;
     out.ended_frame[i] = frame_;
-    Reset(row);
+    EndEpisode(row);
     return;
   }
   // Push the new frame into the AMP ring.
@@ -136,6 +142,14 @@ void TrackingEnv::Step(const float* action, EnvRow row) {
   amp_head_ = (amp_head_ + kAmpHistory - 1) % kAmpHistory;
   WriteAmpFrame(spec, sim_, &amp_history_[static_cast<size_t>(amp_head_) * per_frame]);
   WriteObservation(row);
+}
+
+void TrackingEnv::EndEpisode(EnvRow row) {
+  if (context_->config.auto_reset) {
+    Reset(row);
+  } else {
+    finished_ = true;
+  }
 }
 
 void TrackingEnv::WriteObservation(EnvRow row) {

@@ -33,6 +33,9 @@ struct TrackingEnvConfig {
   ImitationRewardConfig reward;
   int max_episode_steps = 0;  // 0: until the clip ends
   bool random_start_frame = true;
+  // false: an ended episode keeps its final state and later steps do nothing until the next
+  // reset (rollouts and evaluation).
+  bool auto_reset = true;
 };
 
 // The shared, read-only context of a batch of envs.
@@ -68,6 +71,8 @@ class TrackingEnv {
   mjData* mutable_data() { return data_; }
   int clip() const { return clip_; }
   int frame() const { return frame_; }
+  // With auto_reset off: the episode has ended and the env waits for a reset.
+  bool finished() const { return finished_; }
   int64_t physics_resets() const { return physics_resets_; }
   // Reward terms and errors of the current state against the reference at the current frame.
   TrackingErrors CurrentTrackingTerms(float* terms);
@@ -77,6 +82,7 @@ class TrackingEnv {
 
  private:
   void WriteObservation(EnvRow row);
+  void EndEpisode(EnvRow row);
   bool PhysicsDiverged() const;
 
   const EnvContext* context_;
@@ -86,6 +92,7 @@ class TrackingEnv {
   int clip_ = 0;
   int frame_ = 0;
   int episode_steps_ = 0;
+  bool finished_ = false;
   int64_t physics_resets_ = 0;
   // Preallocated scratch so that Step never allocates.
   HumanoidState sim_, reference_, target_;
