@@ -36,13 +36,15 @@ absl::StatusOr<MotionLibrary> MotionLibrary::LoadDefault(const HumanoidSpec& spe
   return LoadDirectory(DataPath("motions"), spec);
 }
 
-absl::Status MotionLibrary::Add(MotionClip clip) {
-  if (clip.name.empty()) return absl::InvalidArgumentError("clip name is empty");
-  if (Find(clip.name) >= 0) return absl::AlreadyExistsError(absl::StrCat("clip '", clip.name, "' already in the library"));
-  if (clip.body_pos.size() != static_cast<size_t>(clip.num_frames) * clip.num_bodies) {
-    return absl::FailedPreconditionError(absl::StrCat("clip '", clip.name, "' has no kinematics computed"));
+absl::Status MotionLibrary::Add(MotionClip clip) { return AddShared(std::make_shared<const MotionClip>(std::move(clip))); }
+
+absl::Status MotionLibrary::AddShared(std::shared_ptr<const MotionClip> clip) {
+  if (clip->name.empty()) return absl::InvalidArgumentError("clip name is empty");
+  if (Find(clip->name) >= 0) return absl::AlreadyExistsError(absl::StrCat("clip '", clip->name, "' already in the library"));
+  if (clip->body_pos.size() != static_cast<size_t>(clip->num_frames) * clip->num_bodies) {
+    return absl::FailedPreconditionError(absl::StrCat("clip '", clip->name, "' has no kinematics computed"));
   }
-  clips_.push_back(std::make_shared<const MotionClip>(std::move(clip)));
+  clips_.push_back(std::move(clip));
   return absl::OkStatus();
 }
 

@@ -21,6 +21,7 @@ class MotionLibrary {
 
   // Fails on a duplicate name or a clip that does not fit the skeleton.
   absl::Status Add(MotionClip clip);
+  absl::Status AddShared(std::shared_ptr<const MotionClip> clip);
 
   int size() const { return static_cast<int>(clips_.size()); }
   const MotionClip& clip(int id) const { return *clips_[id]; }

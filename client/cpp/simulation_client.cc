@@ -1,0 +1,205 @@
+#include "client/cpp/simulation_client.h"
+
+#include <cstring>
+
+#include "absl/strings/ascii.h"
+#include "absl/strings/str_cat.h"
+#include "absl/time/clock.h"
+#include "server/core/atomic_file.h"
+
+namespace modskill {
+
+absl::StatusOr<std::string> ReadTokenFile(const std::string& path) {
+  auto text = ReadFileToString(path, 4096);
+  if (!text.ok()) return text.status();
+  std::string token(absl::StripAsciiWhitespace(*text));
+  if (token.empty()) return absl::InvalidArgumentError(absl::StrCat(path, ": empty token file"));
+  return token;
+}
+
+absl::Status DecodeFloatTensor(const v1::Tensor& tensor, const std::string& field, std::vector<float>* out) {
+  if (tensor.dtype() != v1::FLOAT32) return absl::InvalidArgumentError(absl::StrCat(field, ": not FLOAT32"));
+  int64_t elements = 1;
+  for (int64_t d : tensor.shape()) elements *= d;
+  if (tensor.data().size() != static_cast<size_t>(elements) * sizeof(float)) {
+    return absl::InvalidArgumentError(absl::StrCat(field, ": ", tensor.data().size(), " bytes for ", elements, " floats"));
+  }
+  out->resize(elements);
+  std::memcpy(out->data(), tensor.data().data(), tensor.data().size());
+  return absl::OkStatus();
+}
+
+absl::StatusOr<std::unique_ptr<SimulationClient>> SimulationClient::Connect(const ClientOptions& options) {
+  std::shared_ptr<grpc::ChannelCredentials> credentials = grpc::InsecureChannelCredentials();
+  grpc::ChannelArguments arguments;
+  if (!options.tls_ca_file.empty()) {
+    auto roots = ReadFileToString(options.tls_ca_file, 1 << 20);
+    if (!roots.ok()) return absl::InvalidArgumentError(absl::StrCat("tls_ca: ", roots.status().message()));
+    grpc::SslCredentialsOptions ssl;
+    ssl.pem_root_certs = *roots;
+    credentials = grpc::SslCredentials(ssl);
+    if (!options.tls_server_name.empty()) arguments.SetSslTargetNameOverride(options.tls_server_name);
+  }
+  arguments.SetMaxReceiveMessageSize(static_cast<int>(std::min<int64_t>(options.max_message_bytes, INT32_MAX)));
+  arguments.SetMaxSendMessageSize(static_cast<int>(std::min<int64_t>(options.max_message_bytes, INT32_MAX)));
+  std::unique_ptr<SimulationClient> client(new SimulationClient(options));
+  client->channel_ = grpc::CreateCustomChannel(options.server, credentials, arguments);
+  if (!client->channel_->WaitForConnected(absl::ToChronoTime(absl::Now() + options.connect_timeout))) {
+    return absl::UnavailableError(absl::StrCat("server ", options.server, ": no answer within ",
+                                               absl::FormatDuration(options.connect_timeout)));
+  }
+  client->stub_ = v1::Simulation::NewStub(client->channel_);
+  return client;
+}
+
+void SimulationClient::Prepare(grpc::ClientContext* context) const {
+  if (!options_.token.empty()) context->AddMetadata("authorization", "Bearer " + options_.token);
+}
+
+absl::Status SimulationClient::FromGrpc(const grpc::Status& status, const std::string& rpc) const {
+  if (status.ok()) return absl::OkStatus();
+  return absl::Status(static_cast<absl::StatusCode>(status.error_code()),
+                      absl::StrCat(options_.server, " ", rpc, ": ", status.error_message()));
+}
+
+absl::StatusOr<v1::EnvSpec> SimulationClient::Describe(const std::string& part_layout) {
+  grpc::ClientContext context;
+  Prepare(&context);
+  v1::DescribeRequest request;
+  request.set_part_layout(part_layout);
+  v1::EnvSpec spec;
+  if (auto status = FromGrpc(stub_->Describe(&context, request, &spec), "Describe"); !status.ok()) return status;
+  return spec;
+}
+
+absl::StatusOr<v1::ListMotionsResponse> SimulationClient::ListMotions() {
+  grpc::ClientContext context;
+  Prepare(&context);
+  v1::ListMotionsResponse response;
+  if (auto status = FromGrpc(stub_->ListMotions(&context, {}, &response), "ListMotions"); !status.ok()) return status;
+  return response;
+}
+
+absl::StatusOr<v1::ServerStats> SimulationClient::GetStats() {
+  grpc::ClientContext context;
+  Prepare(&context);
+  v1::ServerStats response;
+  if (auto status = FromGrpc(stub_->GetStats(&context, {}, &response), "GetStats"); !status.ok()) return status;
+  return response;
+}
+
+absl::StatusOr<v1::AddMotionsResponse> SimulationClient::AddMotionFiles(const std::vector<std::string>& paths) {
+  v1::AddMotionsRequest request;
+  for (const std::string& path : paths) {
+    auto bytes = ReadFileToString(path, size_t{1} << 30);
+    if (!bytes.ok()) return bytes.status();
+    v1::MotionUpload* upload = request.add_uploads();
+    upload->set_file_name(path.substr(path.find_last_of('/') + 1));
+    upload->set_data(*std::move(bytes));
+  }
+  return AddMotions(request);
+}
+
+absl::StatusOr<v1::AddMotionsResponse> SimulationClient::AddMotions(const v1::AddMotionsRequest& request) {
+  grpc::ClientContext context;
+  Prepare(&context);
+  v1::AddMotionsResponse response;
+  if (auto status = FromGrpc(stub_->AddMotions(&context, request, &response), "AddMotions"); !status.ok()) return status;
+  return response;
+}
+
+absl::StatusOr<v1::SamplerState> SimulationClient::ReportFailures(const v1::ReportFailuresRequest& request) {
+  grpc::ClientContext context;
+  Prepare(&context);
+  v1::SamplerState response;
+  if (auto status = FromGrpc(stub_->ReportFailures(&context, request, &response), "ReportFailures"); !status.ok()) {
+    return status;
+  }
+  return response;
+}
+
+absl::StatusOr<std::vector<v1::ClipMetrics>> SimulationClient::Rollout(
+    const v1::RolloutRequest& request, const std::function<void(const v1::RolloutFrame&)>& on_frame) {
+  grpc::ClientContext context;
+  Prepare(&context);
+  std::unique_ptr<grpc::ClientReader<v1::RolloutResponse>> reader = stub_->Rollout(&context, request);
+  std::vector<v1::ClipMetrics> metrics;
+  v1::RolloutResponse response;
+  while (reader->Read(&response)) {
+    if (response.has_metrics()) metrics.push_back(response.metrics());
+    if (response.has_frame() && on_frame) on_frame(response.frame());
+  }
+  if (auto status = FromGrpc(reader->Finish(), "Rollout"); !status.ok()) return status;
+  return metrics;
+}
+
+absl::StatusOr<std::unique_ptr<SimulationStream>> SimulationClient::OpenSession(const v1::SessionConfig& config) {
+  std::unique_ptr<SimulationStream> stream(new SimulationStream());
+  stream->server_ = options_.server;
+  Prepare(&stream->context_);
+  stream->stream_ = stub_->Simulate(&stream->context_);
+  v1::SimulateRequest request;
+  *request.mutable_config() = config;
+  if (!stream->stream_->Write(request)) return stream->Fail("Simulate");
+  v1::SimulateResponse response;
+  if (!stream->stream_->Read(&response)) return stream->Fail("Simulate");
+  if (!response.has_opened()) return absl::InternalError(absl::StrCat(options_.server, " Simulate: no SessionOpened reply"));
+  stream->opened_ = std::move(*response.mutable_opened());
+  stream->num_envs_ = config.num_envs();
+  stream->action_size_ = stream->opened_.spec().action_size();
+  return stream;
+}
+
+SimulationStream::~SimulationStream() {
+  if (stream_ != nullptr && !closed_) {
+    context_.TryCancel();
+    stream_->Finish().ok();
+  }
+}
+
+absl::Status SimulationStream::Fail(const std::string& what) {
+  closed_ = true;
+  const grpc::Status status = stream_->Finish();
+  if (status.ok()) return absl::UnavailableError(absl::StrCat(server_, " ", what, ": the stream ended"));
+  return absl::Status(static_cast<absl::StatusCode>(status.error_code()),
+                      absl::StrCat(server_, " ", what, ": ", status.error_message()));
+}
+
+absl::Status SimulationStream::SendActions(const float* actions) {
+  if (closed_) return absl::FailedPreconditionError("session: already closed");
+  v1::Tensor* tensor = request_.mutable_actions();
+  tensor->clear_shape();
+  tensor->add_shape(num_envs_);
+  tensor->add_shape(action_size_);
+  tensor->set_dtype(v1::FLOAT32);
+  tensor->mutable_data()->assign(reinterpret_cast<const char*>(actions),
+                                 sizeof(float) * static_cast<size_t>(num_envs_) * action_size_);
+  last_request_bytes_ = request_.ByteSizeLong();
+  if (!stream_->Write(request_)) return Fail("Simulate");
+  return absl::OkStatus();
+}
+
+absl::Status SimulationStream::ReceiveResult() {
+  if (closed_) return absl::FailedPreconditionError("session: already closed");
+  if (!stream_->Read(&response_)) return Fail("Simulate");
+  if (!response_.has_step()) return absl::InternalError(absl::StrCat(server_, " Simulate: expected a step result"));
+  last_response_bytes_ = response_.ByteSizeLong();
+  return absl::OkStatus();
+}
+
+absl::Status SimulationStream::Step(const float* actions) {
+  if (auto status = SendActions(actions); !status.ok()) return status;
+  return ReceiveResult();
+}
+
+absl::Status SimulationStream::Close() {
+  if (closed_) return absl::OkStatus();
+  closed_ = true;
+  stream_->WritesDone();
+  const grpc::Status status = stream_->Finish();
+  if (status.ok()) return absl::OkStatus();
+  return absl::Status(static_cast<absl::StatusCode>(status.error_code()),
+                      absl::StrCat(server_, " Simulate: ", status.error_message()));
+}
+
+}  // namespace modskill

@@ -1,0 +1,29 @@
+// Core structs -> wire messages. One direction only: the core never sees protobuf.
+#ifndef MODSKILL_SERVER_SERVICE_PROTO_CONVERSIONS_H_
+#define MODSKILL_SERVER_SERVICE_PROTO_CONVERSIONS_H_
+
+#include <string>
+#include <vector>
+
+#include <grpcpp/support/status.h>
+
+#include "absl/status/status.h"
+#include "modskill/v1/modskill.pb.h"
+#include "server/core/env_batch.h"
+#include "server/core/rollout.h"
+
+namespace modskill {
+
+void ToProto(const EnvSpec& spec, const HumanoidModel& humanoid, v1::EnvSpec* out);
+void ToProto(const MotionClip& clip, v1::MotionInfo* out);
+void ToProto(const ClipRolloutMetrics& metrics, v1::ClipMetrics* out);
+
+// Fills a StepResult from the batch's buffers; amp_frames = 0 leaves amp_obs empty.
+void FillStepResult(const EnvBatch& batch, int64_t step, int amp_frames, v1::StepResult* out);
+
+// gRPC's status from abseil's, same code and message.
+grpc::Status ToGrpcStatus(const absl::Status& status);
+
+}  // namespace modskill
+
+#endif  // MODSKILL_SERVER_SERVICE_PROTO_CONVERSIONS_H_

@@ -1,0 +1,441 @@
+#include "server/service/simulation_service.h"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "absl/strings/match.h"
+#include "absl/strings/str_cat.h"
+#include "absl/time/clock.h"
+#include "server/core/clip_file.h"
+#include "server/core/motion_import.h"
+#include "server/service/policy_checkpoint.h"
+#include "server/service/proto_conversions.h"
+#include "server/service/server_log.h"
+#include "server/service/tensor_codec.h"
+
+namespace modskill {
+namespace {
+
+grpc::Status Error(grpc::StatusCode code, const std::string& message) { return grpc::Status(code, message); }
+
+// Constant-time comparison, so a wrong token does not leak its matching prefix length.
+bool SameSecret(const std::string& a, const std::string& b) {
+  if (a.size() != b.size()) return false;
+  unsigned char diff = 0;
+  for (size_t i = 0; i < a.size(); ++i) diff |= static_cast<unsigned char>(a[i] ^ b[i]);
+  return diff == 0;
+}
+
+absl::StatusOr<TerminationMode> ToTermination(v1::TerminationMode mode, v1::TerminationMode default_mode) {
+  if (mode == v1::TERMINATION_UNSPECIFIED) mode = default_mode;
+  switch (mode) {
+    case v1::TRAINING:
+      return TerminationMode::kTraining;
+    case v1::EVALUATION:
+      return TerminationMode::kEvaluation;
+    case v1::NONE:
+      return TerminationMode::kNone;
+    default:
+      return absl::InvalidArgumentError(absl::StrCat("termination: unknown value ", static_cast<int>(mode)));
+  }
+}
+
+absl::StatusOr<double> ToTerminationDistance(float distance, TerminationMode mode) {
+  if (!std::isfinite(distance) || distance < 0 || distance > 100) {
+    return absl::InvalidArgumentError(absl::StrCat("termination_distance: ", distance, " outside [0, 100] m"));
+  }
+  if (distance > 0) return distance;
+  return mode == TerminationMode::kEvaluation ? 0.5 : 0.25;
+}
+
+}  // namespace
+
+absl::StatusOr<std::unique_ptr<SimulationService>> SimulationService::Create(
+    const ServiceOptions& options, std::shared_ptr<const MotionLibrary> motions) {
+  if (motions == nullptr || motions->size() == 0) return absl::InvalidArgumentError("motions: the library is empty");
+  std::unique_ptr<SimulationService> service(new SimulationService(options, motions));
+  auto spec = HumanoidSpec::LoadDefault();
+  if (!spec.ok()) return spec.status();
+  service->skeleton_ = std::make_unique<HumanoidSpec>(*spec);
+  auto humanoid = HumanoidModel::Create(*spec, options.physics);
+  if (!humanoid.ok()) return humanoid.status();
+  service->humanoid_ = *std::move(humanoid);
+  auto layouts = PartLayoutCatalog::LoadDefault(*spec);
+  if (!layouts.ok()) return layouts.status();
+  service->layouts_ = std::make_unique<PartLayoutCatalog>(*std::move(layouts));
+  return service;
+}
+
+grpc::Status SimulationService::CheckAuth(const grpc::ServerContext* context) const {
+  if (options_.auth_token.empty()) return grpc::Status::OK;
+  const auto& metadata = context->client_metadata();
+  auto it = metadata.find("authorization");
+  if (it == metadata.end()) return Error(grpc::StatusCode::UNAUTHENTICATED, "authorization: missing bearer token");
+  const std::string value(it->second.data(), it->second.size());
+  if (!SameSecret(value, "Bearer " + options_.auth_token)) {
+    return Error(grpc::StatusCode::UNAUTHENTICATED, "authorization: wrong bearer token");
+  }
+  return grpc::Status::OK;
+}
+
+absl::StatusOr<PartLayout> SimulationService::Layout(const std::string& name) const {
+  auto layout = layouts_->Get(name.empty() ? layouts_->default_name() : name);
+  if (!layout.ok()) return absl::NotFoundError(layout.status().message());
+  return layout;
+}
+
+grpc::Status SimulationService::Describe(grpc::ServerContext* context, const v1::DescribeRequest* request,
+                                         v1::EnvSpec* response) {
+  if (auto auth = CheckAuth(context); !auth.ok()) return auth;
+  auto layout = Layout(request->part_layout());
+  if (!layout.ok()) return ToGrpcStatus(layout.status());
+  ToProto(MakeEnvSpec(*humanoid_, *layout), *humanoid_, response);
+  for (const std::string& name : layouts_->Names()) response->add_part_layouts(name);
+  response->set_num_motions(motions_.Snapshot()->size());
+  return grpc::Status::OK;
+}
+
+grpc::Status SimulationService::Simulate(grpc::ServerContext* context,
+                                         grpc::ServerReaderWriter<v1::SimulateResponse, v1::SimulateRequest>* stream) {
+  if (auto auth = CheckAuth(context); !auth.ok()) return auth;
+  v1::SimulateRequest request;
+  if (!stream->Read(&request)) return Error(grpc::StatusCode::INVALID_ARGUMENT, "config: the stream ended before it");
+  if (!request.has_config()) {
+    return Error(grpc::StatusCode::INVALID_ARGUMENT, "config: the first message must carry the session config");
+  }
+  const v1::SessionConfig& config = request.config();
+  if (config.num_envs() < 1) {
+    return Error(grpc::StatusCode::INVALID_ARGUMENT, absl::StrCat("num_envs: ", config.num_envs(), " must be >= 1"));
+  }
+  if (config.num_envs() > options_.max_envs_per_session) {
+    return Error(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                 absl::StrCat("num_envs: ", config.num_envs(), " exceeds --max_envs_per_session=",
+                              options_.max_envs_per_session));
+  }
+  if (config.max_episode_steps() < 0) {
+    return Error(grpc::StatusCode::INVALID_ARGUMENT, "max_episode_steps: must be >= 0");
+  }
+  auto layout = Layout(config.part_layout());
+  if (!layout.ok()) return ToGrpcStatus(layout.status());
+  auto termination = ToTermination(config.termination(), v1::TRAINING);
+  if (!termination.ok()) return ToGrpcStatus(termination.status());
+  auto distance = ToTerminationDistance(config.termination_distance(), *termination);
+  if (!distance.ok()) return ToGrpcStatus(distance.status());
+  int amp_frames = kAmpHistory;
+  if (config.amp_obs() == v1::NEWEST) amp_frames = 1;
+  if (config.amp_obs() == v1::OMIT) amp_frames = 0;
+  if (!v1::AmpObs_IsValid(config.amp_obs())) return Error(grpc::StatusCode::INVALID_ARGUMENT, "amp_obs: unknown value");
+
+  std::shared_ptr<const MotionLibrary> motions = motions_.Snapshot();
+  if (config.motions_size() > 0) {
+    auto subset = motions->Subset({config.motions().begin(), config.motions().end()});
+    if (!subset.ok()) return ToGrpcStatus(subset.status());
+    motions = std::make_shared<const MotionLibrary>(*std::move(subset));
+  }
+  auto session_id = registry_.Reserve();
+  if (!session_id.ok()) return ToGrpcStatus(session_id.status());
+
+  EnvBatchConfig batch_config;
+  batch_config.num_envs = config.num_envs();
+  batch_config.num_threads = options_.threads_per_session;
+  batch_config.seed = config.seed();
+  batch_config.env.termination = *termination;
+  batch_config.env.termination_distance = *distance;
+  batch_config.env.max_episode_steps = config.max_episode_steps();
+  auto batch = EnvBatch::Create(batch_config, humanoid_, *layout, motions);
+  if (!batch.ok()) {
+    registry_.Release();
+    return ToGrpcStatus(batch.status());
+  }
+  std::vector<std::string> clip_names;
+  for (int c = 0; c < motions->size(); ++c) clip_names.push_back(motions->clip(c).name);
+  auto session = std::make_shared<SimulationSession>(*session_id, context->peer(), *std::move(batch), clip_names);
+  registry_.Register(session);
+  EnvBatch& envs = *session->batch;
+  LogLine("session %s opened by %s: %d envs, %d clips, layout %s", session->id, session->peer, envs.num_envs(),
+          motions->size(), layout->name);
+
+  // The same messages are reused for every step so that their buffers keep their capacity.
+  v1::SimulateResponse response;
+  envs.Reset();
+  {
+    v1::SessionOpened* opened = response.mutable_opened();
+    opened->set_session_id(session->id);
+    ToProto(envs.spec(), *humanoid_, opened->mutable_spec());
+    opened->mutable_spec()->set_num_motions(motions->size());
+    for (const std::string& name : clip_names) opened->add_clip_names(name);
+    FillStepResult(envs, 0, amp_frames, opened->mutable_initial());
+  }
+  grpc::Status result = grpc::Status::OK;
+  std::vector<float> actions;
+  const int64_t n = envs.num_envs(), action_size = envs.spec().action_size;
+  const char* ending = "client closed the stream";
+  if (!stream->Write(response)) {
+    ending = "client went away";
+  } else {
+    response.mutable_step();  // switch the oneof once; its tensors are then reused
+    while (stream->Read(&request)) {
+      if (!request.has_actions()) {
+        result = Error(grpc::StatusCode::INVALID_ARGUMENT, "actions: every message after the config carries actions");
+        break;
+      }
+      if (absl::Status status = ReadFloatTensor(request.actions(), "actions", {n, action_size}, &actions); !status.ok()) {
+        result = ToGrpcStatus(status);
+        break;
+      }
+      if (absl::Status status = envs.Step(actions); !status.ok()) {
+        result = ToGrpcStatus(status);
+        break;
+      }
+      int64_t episodes = 0;
+      for (uint8_t done : envs.buffers().done) episodes += done;
+      const int64_t physics_resets = envs.physics_resets() - session->physics_resets;
+      session->physics_resets += physics_resets;
+      session->episodes += episodes;
+      registry_.AddSteps(n, episodes, physics_resets);
+      FillStepResult(envs, ++session->steps, amp_frames, response.mutable_step());
+      if (!stream->Write(response)) {
+        ending = "client went away";
+        break;
+      }
+    }
+  }
+  if (!result.ok()) ending = "error";
+  const double seconds = absl::ToDoubleSeconds(absl::Now() - session->opened);
+  LogLine("session %s closed (%s%s%s): %lld steps x %d envs in %.1f s, %.0f env steps/s, %lld episodes, "
+          "%lld physics resets, %lld failure reports",
+          session->id, ending, result.ok() ? "" : ": ", result.error_message(), static_cast<long long>(session->steps),
+          envs.num_envs(), seconds, seconds > 0 ? session->steps * n / seconds : 0.0,
+          static_cast<long long>(session->episodes), static_cast<long long>(session->physics_resets),
+          static_cast<long long>(session->failure_reports));
+  registry_.Close(session->id);
+  return result;
+}
+
+grpc::Status SimulationService::ReportFailures(grpc::ServerContext* context, const v1::ReportFailuresRequest* request,
+                                               v1::SamplerState* response) {
+  if (auto auth = CheckAuth(context); !auth.ok()) return auth;
+  std::shared_ptr<SimulationSession> session = registry_.Find(request->session_id());
+  if (session == nullptr) {
+    return Error(grpc::StatusCode::NOT_FOUND, absl::StrCat("session_id: no open session '", request->session_id(), "'"));
+  }
+  const MotionLibrary& motions = session->batch->motions();
+  std::vector<FailureLedger::Report> reports;
+  reports.reserve(request->failures_size());
+  for (int r = 0; r < request->failures_size(); ++r) {
+    const v1::ClipFailure& failure = request->failures(r);
+    FailureLedger::Report report;
+    report.clip = motions.Find(failure.clip());
+    if (report.clip < 0) {
+      return Error(grpc::StatusCode::NOT_FOUND,
+                   absl::StrCat("failures[", r, "].clip: '", failure.clip(), "' is not a clip of this session"));
+    }
+    report.frame = failure.frame();
+    report.part_errors.assign(failure.part_errors().begin(), failure.part_errors().end());
+    report.terminated = failure.terminated();
+    reports.push_back(std::move(report));
+  }
+  std::vector<int> frames;
+  for (int c = 0; c < motions.size(); ++c) frames.push_back(motions.clip(c).num_frames);
+  absl::MutexLock lock(&session->mutex);
+  if (absl::Status status = session->ledger.Record(reports, frames); !status.ok()) return ToGrpcStatus(status);
+  session->failure_reports += request->failures_size();
+  registry_.AddFailureReports(request->failures_size());
+  response->set_session_id(session->id);
+  response->set_reports(session->ledger.reports());
+  const ClipSampler& sampler = session->batch->sampler();
+  for (int c = 0; c < motions.size(); ++c) {
+    const ClipFailureRecord& record = session->ledger.clips()[c];
+    v1::ClipSamplingState* clip = response->add_clips();
+    clip->set_clip(motions.clip(c).name);
+    clip->set_weight(sampler.weights()[c]);
+    clip->set_probability(sampler.Probability(c));
+    clip->set_failures(record.failures);
+    clip->set_successes(record.successes);
+    clip->set_last_failed_frame(record.last_failed_frame);
+    for (double e : record.mean_part_errors) clip->add_mean_part_errors(static_cast<float>(e));
+  }
+  return grpc::Status::OK;
+}
+
+grpc::Status SimulationService::Rollout(grpc::ServerContext* context, const v1::RolloutRequest* request,
+                                        grpc::ServerWriter<v1::RolloutResponse>* writer) {
+  if (auto auth = CheckAuth(context); !auth.ok()) return auth;
+  absl::StatusOr<std::unique_ptr<PolicyCheckpoint>> policy;
+  if (request->has_checkpoint_path()) {
+    if (request->checkpoint_path().empty()) return Error(grpc::StatusCode::INVALID_ARGUMENT, "checkpoint_path: empty");
+    policy = PolicyCheckpoint::LoadFile(request->checkpoint_path());
+  } else if (request->has_checkpoint_bytes()) {
+    policy = PolicyCheckpoint::LoadBytes(request->checkpoint_bytes());
+  } else {
+    return Error(grpc::StatusCode::INVALID_ARGUMENT, "checkpoint: set checkpoint_path or checkpoint_bytes");
+  }
+  if (!policy.ok()) return ToGrpcStatus(policy.status());
+  auto layout = Layout((*policy)->spec().part_layout);
+  if (!layout.ok()) {
+    return Error(grpc::StatusCode::FAILED_PRECONDITION,
+                 absl::StrCat("checkpoint: trained with layout '", (*policy)->spec().part_layout,
+                              "' that this server does not offer"));
+  }
+  const EnvSpec spec = MakeEnvSpec(*humanoid_, *layout);
+  if (absl::Status status = (*policy)->spec().CheckCompatible(spec); !status.ok()) return ToGrpcStatus(status);
+  if (request->max_steps_per_clip() < 0) return Error(grpc::StatusCode::INVALID_ARGUMENT, "max_steps_per_clip: < 0");
+
+  std::shared_ptr<const MotionLibrary> motions = motions_.Snapshot();
+  std::vector<int> clip_ids;
+  for (int c = 0; c < request->clips_size(); ++c) {
+    const int id = motions->Find(request->clips(c));
+    if (id < 0) return Error(grpc::StatusCode::NOT_FOUND, absl::StrCat("clips[", c, "]: unknown clip '", request->clips(c), "'"));
+    clip_ids.push_back(id);
+  }
+  if (clip_ids.empty()) {
+    for (int c = 0; c < motions->size(); ++c) clip_ids.push_back(c);
+  }
+  auto termination = ToTermination(request->termination(), v1::EVALUATION);
+  if (!termination.ok()) return ToGrpcStatus(termination.status());
+  auto distance = ToTerminationDistance(request->termination_distance(), *termination);
+  if (!distance.ok()) return ToGrpcStatus(distance.status());
+  RolloutOptions options;
+  options.termination = *termination;
+  options.termination_distance = *distance;
+  options.max_steps_per_clip = request->max_steps_per_clip();
+  options.num_threads = options_.threads_per_session;
+  options.physics = options_.physics;
+
+  bool client_gone = false;
+  v1::RolloutResponse frame_message;
+  RolloutFrameCallback on_frame = nullptr;
+  if (request->stream_frames()) {
+    on_frame = [&](int clip_index, int frame, const std::vector<Vec3>& sim, const std::vector<Vec3>& ref) {
+      if (client_gone) return;
+      v1::RolloutFrame* out = frame_message.mutable_frame();
+      out->set_clip(motions->clip(clip_ids[clip_index]).name);
+      out->set_frame(frame);
+      std::vector<float> sim_flat, ref_flat;
+      for (size_t b = 0; b < sim.size(); ++b) {
+        for (int k = 0; k < 3; ++k) {
+          sim_flat.push_back(static_cast<float>(sim[b][k]));
+          ref_flat.push_back(static_cast<float>(ref[b][k]));
+        }
+      }
+      const int64_t bodies = static_cast<int64_t>(sim.size());
+      SetFloatTensor({bodies, 3}, sim_flat.data(), out->mutable_sim_body_pos());
+      SetFloatTensor({bodies, 3}, ref_flat.data(), out->mutable_ref_body_pos());
+      client_gone = !writer->Write(frame_message);
+    };
+  }
+  PolicyCheckpoint* checkpoint = policy->get();
+  auto metrics = RunRollout(
+      humanoid_, *layout, motions, clip_ids,
+      [&](const float* obs, int n, float* actions) -> absl::Status {
+        if (context->IsCancelled() || client_gone) return absl::CancelledError("rollout: the client went away");
+        return checkpoint->Act(obs, n, actions);
+      },
+      options, on_frame);
+  if (!metrics.ok()) return ToGrpcStatus(metrics.status());
+  int successes = 0;
+  for (const ClipRolloutMetrics& clip : *metrics) {
+    v1::RolloutResponse message;
+    ToProto(clip, message.mutable_metrics());
+    successes += clip.success;
+    if (!writer->Write(message)) break;
+  }
+  LogLine("rollout by %s: %d clips, %d succeeded", context->peer(), static_cast<int>(metrics->size()), successes);
+  return grpc::Status::OK;
+}
+
+grpc::Status SimulationService::ListMotions(grpc::ServerContext* context, const v1::ListMotionsRequest* request,
+                                            v1::ListMotionsResponse* response) {
+  if (auto auth = CheckAuth(context); !auth.ok()) return auth;
+  std::shared_ptr<const MotionLibrary> motions = motions_.Snapshot();
+  for (int c = 0; c < motions->size(); ++c) ToProto(motions->clip(c), response->add_motions());
+  return grpc::Status::OK;
+}
+
+grpc::Status SimulationService::AddMotions(grpc::ServerContext* context, const v1::AddMotionsRequest* request,
+                                           v1::AddMotionsResponse* response) {
+  if (auto auth = CheckAuth(context); !auth.ok()) return auth;
+  if (request->uploads_size() == 0) return Error(grpc::StatusCode::INVALID_ARGUMENT, "uploads: none");
+  int64_t total = 0;
+  for (const v1::MotionUpload& upload : request->uploads()) total += upload.data().size();
+  if (total > options_.max_upload_bytes) {
+    return Error(grpc::StatusCode::RESOURCE_EXHAUSTED, absl::StrCat("uploads: ", total, " bytes exceed --max_upload_mb (",
+                                                                    options_.max_upload_bytes, " bytes)"));
+  }
+  // Importers read files: each upload goes through a private temporary directory.
+  std::error_code error;
+  const std::filesystem::path dir = std::filesystem::temp_directory_path(error) /
+                                    absl::StrCat("modskill-upload-", ::getpid(), "-", absl::ToUnixNanos(absl::Now()));
+  std::filesystem::create_directories(dir, error);
+  if (error) return Error(grpc::StatusCode::INTERNAL, absl::StrCat("uploads: cannot create a temporary directory: ", error.message()));
+  std::vector<MotionClip> clips;
+  grpc::Status result = grpc::Status::OK;
+  for (int u = 0; u < request->uploads_size() && result.ok(); ++u) {
+    const v1::MotionUpload& upload = request->uploads(u);
+    const std::string file_name = std::filesystem::path(upload.file_name()).filename().string();
+    if (file_name.empty() || file_name == "." || file_name == "..") {
+      result = Error(grpc::StatusCode::INVALID_ARGUMENT, absl::StrCat("uploads[", u, "].file_name: empty"));
+      break;
+    }
+    const std::string path = (dir / file_name).string();
+    {
+      std::ofstream out(path, std::ios::binary);
+      out.write(upload.data().data(), static_cast<std::streamsize>(upload.data().size()));
+    }
+    ImportOptions import;
+    import.name = upload.name();
+    import.label = upload.label();
+    auto clip = ImportMotionFile(path, *skeleton_, import);
+    if (!clip.ok()) {
+      // The message names the temporary path; name the upload instead.
+      std::string message(clip.status().message());
+      const size_t at = message.find(path);
+      if (at != std::string::npos) message.replace(at, path.size(), file_name);
+      result = Error(clip.status().code() == absl::StatusCode::kNotFound ? grpc::StatusCode::INVALID_ARGUMENT
+                                                                         : static_cast<grpc::StatusCode>(clip.status().code()),
+                     absl::StrCat("uploads[", u, "]: ", message));
+      break;
+    }
+    if (clip->source.empty() || clip->source == file_name) clip->source = absl::StrCat("upload:", file_name);
+    clips.push_back(*std::move(clip));
+  }
+  std::filesystem::remove_all(dir, error);
+  if (!result.ok()) return result;
+  std::vector<MotionClip> added = clips;
+  if (absl::Status status = motions_.Add(std::move(clips)); !status.ok()) return ToGrpcStatus(status);
+  for (const MotionClip& clip : added) ToProto(clip, response->add_added());
+  LogLine("%d clips added by %s", static_cast<int>(added.size()), context->peer());
+  return grpc::Status::OK;
+}
+
+grpc::Status SimulationService::GetStats(grpc::ServerContext* context, const v1::GetStatsRequest* request,
+                                         v1::ServerStats* response) {
+  if (auto auth = CheckAuth(context); !auth.ok()) return auth;
+  ServerTotals totals = registry_.Totals();
+  response->set_active_sessions(totals.active_sessions);
+  response->set_sessions_opened(totals.sessions_opened);
+  response->set_env_steps(totals.env_steps);
+  response->set_env_steps_per_second(totals.env_steps_per_second);
+  response->set_episodes(totals.episodes);
+  response->set_physics_resets(totals.physics_resets);
+  response->set_failure_reports(totals.failure_reports);
+  response->set_uptime_seconds(totals.uptime_seconds);
+  response->set_num_motions(motions_.Snapshot()->size());
+  const absl::Time now = absl::Now();
+  for (const auto& session : totals.sessions) {
+    v1::SessionStats* stats = response->add_sessions();
+    stats->set_session_id(session->id);
+    stats->set_peer(session->peer);
+    stats->set_num_envs(session->batch->num_envs());
+    stats->set_steps(session->steps);
+    const double seconds = absl::ToDoubleSeconds(now - session->opened);
+    stats->set_steps_per_second(seconds > 0 ? session->steps * session->batch->num_envs() / seconds : 0);
+    stats->set_episodes(session->episodes);
+    stats->set_physics_resets(session->physics_resets);
+    stats->set_failure_reports(session->failure_reports);
+  }
+  return grpc::Status::OK;
+}
+
+}  // namespace modskill

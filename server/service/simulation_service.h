@@ -1,0 +1,65 @@
+// The gRPC face of the simulation core: validates every request at the edge, translates it to
+// core calls and core results back to messages. No physics or sampling logic lives here.
+#ifndef MODSKILL_SERVER_SERVICE_SIMULATION_SERVICE_H_
+#define MODSKILL_SERVER_SERVICE_SIMULATION_SERVICE_H_
+
+#include <memory>
+#include <string>
+
+#include "modskill/v1/modskill.grpc.pb.h"
+#include "server/core/env_batch.h"
+#include "server/service/motion_store.h"
+#include "server/service/session_registry.h"
+
+namespace modskill {
+
+struct ServiceOptions {
+  int threads_per_session = 1;
+  int max_sessions = 8;
+  int max_envs_per_session = 4096;
+  int64_t max_upload_bytes = int64_t{64} << 20;
+  std::string auth_token;  // empty: no authentication
+  PhysicsOptions physics;
+};
+
+class SimulationService final : public v1::Simulation::Service {
+ public:
+  // Fails when the skeleton, layouts or humanoid cannot be built.
+  static absl::StatusOr<std::unique_ptr<SimulationService>> Create(const ServiceOptions& options,
+                                                                   std::shared_ptr<const MotionLibrary> motions);
+
+  grpc::Status Describe(grpc::ServerContext* context, const v1::DescribeRequest* request,
+                        v1::EnvSpec* response) override;
+  grpc::Status Simulate(grpc::ServerContext* context,
+                        grpc::ServerReaderWriter<v1::SimulateResponse, v1::SimulateRequest>* stream) override;
+  grpc::Status ReportFailures(grpc::ServerContext* context, const v1::ReportFailuresRequest* request,
+                              v1::SamplerState* response) override;
+  grpc::Status Rollout(grpc::ServerContext* context, const v1::RolloutRequest* request,
+                       grpc::ServerWriter<v1::RolloutResponse>* writer) override;
+  grpc::Status ListMotions(grpc::ServerContext* context, const v1::ListMotionsRequest* request,
+                           v1::ListMotionsResponse* response) override;
+  grpc::Status AddMotions(grpc::ServerContext* context, const v1::AddMotionsRequest* request,
+                          v1::AddMotionsResponse* response) override;
+  grpc::Status GetStats(grpc::ServerContext* context, const v1::GetStatsRequest* request,
+                        v1::ServerStats* response) override;
+
+  SessionRegistry& registry() { return registry_; }
+
+ private:
+  SimulationService(const ServiceOptions& options, std::shared_ptr<const MotionLibrary> motions)
+      : options_(options), motions_(std::move(motions)), registry_(options.max_sessions) {}
+
+  grpc::Status CheckAuth(const grpc::ServerContext* context) const;
+  absl::StatusOr<PartLayout> Layout(const std::string& name) const;
+
+  const ServiceOptions options_;
+  MotionStore motions_;
+  SessionRegistry registry_;
+  std::unique_ptr<HumanoidSpec> skeleton_;
+  std::shared_ptr<const HumanoidModel> humanoid_;
+  std::unique_ptr<PartLayoutCatalog> layouts_;
+};
+
+}  // namespace modskill
+
+#endif  // MODSKILL_SERVER_SERVICE_SIMULATION_SERVICE_H_

@@ -1,0 +1,93 @@
+// modskill-server: serves humanoid simulation sessions, rollouts and the motion library over
+// gRPC (see proto/modskill/v1/modskill.proto).
+#include <pthread.h>
+#include <signal.h>
+
+#include <cstdio>
+#include <string>
+
+#include "absl/flags/flag.h"
+#include "absl/flags/parse.h"
+#include "absl/flags/usage.h"
+#include "absl/strings/ascii.h"
+#include "server/core/atomic_file.h"
+#include "server/core/data_paths.h"
+#include "server/service/policy_checkpoint.h"
+#include "server/service/server_log.h"
+#include "server/service/server_runner.h"
+
+ABSL_FLAG(int, port, 50051, "TCP port (0: any free port, printed at start)");
+ABSL_FLAG(std::string, bind, "127.0.0.1", "address to listen on (0.0.0.0 for every interface)");
+ABSL_FLAG(int, threads, 2, "worker threads stepping each session's envs");
+ABSL_FLAG(std::string, motions, "", "directory of .msclip files (default: the shipped library)");
+ABSL_FLAG(int, max_sessions, 8, "simultaneous simulation sessions");
+ABSL_FLAG(int, max_envs_per_session, 4096, "envs one session may open");
+ABSL_FLAG(int, max_upload_mb, 64, "bytes one AddMotions call may upload, in MiB");
+ABSL_FLAG(int, max_message_mb, 512, "largest gRPC message, in MiB");
+ABSL_FLAG(std::string, auth_token_file, "", "file holding a token; every call then needs 'authorization: Bearer <token>'");
+ABSL_FLAG(std::string, tls_cert, "", "PEM certificate chain (with --tls_key: serve TLS)");
+ABSL_FLAG(std::string, tls_key, "", "PEM private key");
+ABSL_FLAG(std::string, pd_mode, "position_implicit", "position_implicit or stable_pd");
+
+int main(int argc, char** argv) {
+  absl::SetProgramUsageMessage("serves humanoid simulation sessions over gRPC");
+  absl::ParseCommandLine(argc, argv);
+  using namespace modskill;
+  auto fail = [](const std::string& message) {
+    std::fprintf(stderr, "error: %s\n", message.c_str());
+    return 2;
+  };
+  ServerOptions options;
+  options.bind = absl::GetFlag(FLAGS_bind);
+  options.port = absl::GetFlag(FLAGS_port);
+  options.tls_cert_file = absl::GetFlag(FLAGS_tls_cert);
+  options.tls_key_file = absl::GetFlag(FLAGS_tls_key);
+  if (absl::GetFlag(FLAGS_max_message_mb) < 1) return fail("--max_message_mb must be >= 1");
+  options.max_message_bytes = int64_t{absl::GetFlag(FLAGS_max_message_mb)} << 20;
+  options.service.threads_per_session = absl::GetFlag(FLAGS_threads);
+  options.service.max_sessions = absl::GetFlag(FLAGS_max_sessions);
+  options.service.max_envs_per_session = absl::GetFlag(FLAGS_max_envs_per_session);
+  options.service.max_upload_bytes = int64_t{absl::GetFlag(FLAGS_max_upload_mb)} << 20;
+  if (options.service.threads_per_session < 1) return fail("--threads must be >= 1");
+  if (options.service.max_sessions < 1) return fail("--max_sessions must be >= 1");
+  if (options.service.max_envs_per_session < 1) return fail("--max_envs_per_session must be >= 1");
+  auto pd_mode = ParsePdMode(absl::GetFlag(FLAGS_pd_mode));
+  if (!pd_mode.ok()) return fail(std::string(pd_mode.status().message()));
+  options.service.physics.pd_mode = *pd_mode;
+  if (!absl::GetFlag(FLAGS_auth_token_file).empty()) {
+    auto token = ReadFileToString(absl::GetFlag(FLAGS_auth_token_file), 4096);
+    if (!token.ok()) return fail(absl::StrCat("--auth_token_file: ", token.status().message()));
+    options.service.auth_token = std::string(absl::StripAsciiWhitespace(*token));
+    if (options.service.auth_token.empty()) return fail("--auth_token_file: the file is empty");
+  }
+  auto spec = HumanoidSpec::LoadDefault();
+  if (!spec.ok()) return fail(std::string(spec.status().message()));
+  const std::string motion_dir = absl::GetFlag(FLAGS_motions).empty() ? DataPath("motions") : absl::GetFlag(FLAGS_motions);
+  auto library = MotionLibrary::LoadDirectory(motion_dir, *spec);
+  if (!library.ok()) return fail(absl::StrCat("--motions: ", library.status().message()));
+  // One intra-op thread: rollout batches are small and sessions already use --threads.
+  SetTorchThreads(1);
+
+  // SIGINT/SIGTERM are taken by a dedicated wait below, not by whichever thread they hit.
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+
+  const int num_clips = library->size();
+  auto server = StartServer(options, std::make_shared<const MotionLibrary>(*std::move(library)));
+  if (!server.ok()) return fail(std::string(server.status().message()));
+  LogLine("modskill-server listening on %s:%d (%s%s), %d clips from %s, %d threads per session", options.bind,
+          (*server)->port(), options.tls_cert_file.empty() ? "insecure" : "TLS",
+          options.service.auth_token.empty() ? "" : ", token auth", num_clips, motion_dir,
+          options.service.threads_per_session);
+  std::fflush(stderr);
+  int signal_number = 0;
+  sigwait(&signals, &signal_number);
+  LogLine("%s: draining (running calls get 5 s), then stopping", signal_number == SIGINT ? "SIGINT" : "SIGTERM");
+  (*server)->Shutdown(absl::Seconds(5));
+  (*server)->Wait();
+  LogLine("stopped");
+  return 0;
+}
