@@ -392,9 +392,8 @@ grpc::Status SimulationService::AddMotions(grpc::ServerContext* context, const v
       std::string message(clip.status().message());
       const size_t at = message.find(path);
       if (at != std::string::npos) message.replace(at, path.size(), file_name);
-      result = Error(clip.status().code() == absl::StatusCode::kNotFound ? grpc::StatusCode::INVALID_ARGUMENT
-                                                                         : static_cast<grpc::StatusCode>(clip.status().code()),
-                     absl::StrCat("uploads[", u, "]: ", message));
+      // Whatever the importer saw (truncation, bad fields), the client sent bad data.
+      result = Error(grpc::StatusCode::INVALID_ARGUMENT, absl::StrCat("uploads[", u, "]: ", message));
       break;
     }
     if (clip->source.empty() || clip->source == file_name) clip->source = absl::StrCat("upload:", file_name);

@@ -1,0 +1,555 @@
+// The gRPC server end to end: the contract, equality with the in-process core, every bad
+// input answered with the right status, concurrent and vanishing clients, auth.
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <thread>
+
+#include <gmock/gmock.h>
+
+#include "absl/time/clock.h"
+#include "server/core/atomic_file.h"
+#include "server/service/policy_checkpoint.h"
+#include "tests/server_fixture.h"
+
+namespace modskill {
+namespace {
+
+using ::testing::HasSubstr;
+
+v1::SessionConfig Config(int envs, uint64_t seed = 1) {
+  v1::SessionConfig config;
+  config.set_num_envs(envs);
+  config.set_seed(seed);
+  return config;
+}
+
+std::string TempDir() {
+  const std::string dir = std::string(MODSKILL_TEST_TMP_DIR) + "/server";
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+std::string ZeroPolicy(const std::string& layout_name = "5part") {
+  auto catalog = PartLayoutCatalog::LoadDefault(DefaultSpec());
+  auto humanoid = HumanoidModel::Create(DefaultSpec(), PhysicsOptions());
+  const EnvSpec spec = MakeEnvSpec(**humanoid, *catalog->Get(layout_name));
+  const std::string path = TempDir() + "/zero_" + layout_name + ".pt";
+  EXPECT_TRUE(SaveAffinePolicy(path, PolicySpec::FromEnvSpec(spec), {}, {}).ok());
+  return path;
+}
+
+// Sends a raw request sequence and returns the stream's final status.
+grpc::Status RawSimulate(const RunningServer& server, const std::vector<v1::SimulateRequest>& requests) {
+  auto channel = grpc::CreateChannel(absl::StrCat("127.0.0.1:", server.port()), grpc::InsecureChannelCredentials());
+  auto stub = v1::Simulation::NewStub(channel);
+  grpc::ClientContext context;
+  auto stream = stub->Simulate(&context);
+  v1::SimulateResponse response;
+  for (const auto& request : requests) {
+    if (!stream->Write(request)) break;
+    if (!stream->Read(&response)) break;
+  }
+  stream->WritesDone();
+  while (stream->Read(&response)) {
+  }
+  return stream->Finish();
+}
+
+class SimulationServerTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    ServerOptions options;
+    options.service.max_sessions = 3;
+    options.service.max_envs_per_session = 64;
+    options.service.max_upload_bytes = 1 << 20;
+    server_ = StartTestServer(options);
+    ASSERT_NE(server_, nullptr);
+    client_ = ConnectTo(*server_);
+    ASSERT_NE(client_, nullptr);
+  }
+  void TearDown() override { server_->Shutdown(absl::Seconds(1)); }
+
+  std::unique_ptr<RunningServer> server_;
+  std::unique_ptr<SimulationClient> client_;
+};
+
+TEST_F(SimulationServerTest, DescribeShipsTheLayout) {
+  auto spec = client_->Describe();
+  ASSERT_TRUE(spec.ok()) << spec.status();
+  EXPECT_EQ(spec->obs_size(), 934);
+  EXPECT_EQ(spec->action_size(), 69);
+  EXPECT_EQ(spec->amp_obs_per_frame(), 232);
+  EXPECT_EQ(spec->amp_history(), 10);
+  EXPECT_EQ(spec->part_layout(), "5part");
+  ASSERT_EQ(spec->parts_size(), 5);
+  EXPECT_EQ(spec->parts(0).name(), "L_Leg");
+  EXPECT_EQ(spec->parts(0).action().size(), 12);
+  EXPECT_EQ(spec->parts(2).bodies(0), "Pelvis");
+  EXPECT_EQ(spec->body_names_size(), 24);
+  EXPECT_EQ(spec->joint_names_size(), 69);
+  EXPECT_EQ(spec->action_offset_size(), 69);
+  EXPECT_NEAR(spec->control_dt(), 1.0 / 30, 1e-9);
+  EXPECT_EQ(spec->num_motions(), DefaultMotions()->size());
+  EXPECT_EQ(spec->reward_terms_size(), kNumRewardTerms);
+  EXPECT_EQ(spec->part_layouts_size(), 4);
+  auto three = client_->Describe("3part");
+  ASSERT_TRUE(three.ok());
+  EXPECT_EQ(three->parts_size(), 3);
+  auto unknown = client_->Describe("4part");
+  ASSERT_FALSE(unknown.ok());
+  EXPECT_EQ(unknown.status().code(), absl::StatusCode::kNotFound);
+  EXPECT_THAT(std::string(unknown.status().message()), HasSubstr("4part"));
+}
+
+// The server's results are the core's, bit for bit, for the same seed and actions.
+TEST_F(SimulationServerTest, SessionEqualsInProcessEnvBatch) {
+  v1::SessionConfig config = Config(6, 77);
+  auto stream = client_->OpenSession(config);
+  ASSERT_TRUE(stream.ok()) << stream.status();
+  EnvBatchConfig local_config;
+  local_config.num_envs = 6;
+  local_config.seed = 77;
+  auto local = MakeBatch(local_config);
+  local->Reset();
+  std::vector<float> obs;
+  ASSERT_TRUE(DecodeFloatTensor((*stream)->opened().initial().obs(), "obs", &obs).ok());
+  ASSERT_EQ(obs, local->buffers().obs);
+  EXPECT_EQ((*stream)->opened().clip_names_size(), DefaultMotions()->size());
+  for (int s = 0; s < 12; ++s) {
+    const std::vector<float> actions = ReferenceActions(*local);
+    ASSERT_TRUE(local->Step(actions).ok());
+    ASSERT_TRUE((*stream)->Step(actions.data()).ok());
+    const v1::StepResult& result = (*stream)->result();
+    EXPECT_EQ(result.step(), s + 1);
+    std::vector<float> remote;
+    ASSERT_TRUE(DecodeFloatTensor(result.obs(), "obs", &remote).ok());
+    ASSERT_EQ(remote, local->buffers().obs) << s;
+    ASSERT_TRUE(DecodeFloatTensor(result.reward(), "reward", &remote).ok());
+    ASSERT_EQ(remote, local->buffers().reward) << s;
+    ASSERT_TRUE(DecodeFloatTensor(result.amp_obs(), "amp_obs", &remote).ok());
+    ASSERT_EQ(remote, local->buffers().amp_obs) << s;
+    ASSERT_EQ(result.done().data(), std::string(local->buffers().done.begin(), local->buffers().done.end()));
+    ASSERT_EQ(result.clip_id().shape(0), 6);
+    ASSERT_EQ(std::memcmp(result.clip_id().data().data(), local->buffers().clip_id.data(), 6 * 4), 0);
+  }
+  EXPECT_TRUE((*stream)->Close().ok());
+}
+
+TEST_F(SimulationServerTest, AmpObsCanBeTheNewestFrameOrOmitted) {
+  v1::SessionConfig config = Config(3);
+  config.set_amp_obs(v1::NEWEST);
+  auto newest = client_->OpenSession(config);
+  ASSERT_TRUE(newest.ok());
+  EXPECT_EQ((*newest)->opened().initial().amp_obs().shape(1), 232);
+  EXPECT_EQ((*newest)->opened().initial().amp_obs().data().size(), 3u * 232 * 4);
+  config.set_amp_obs(v1::OMIT);
+  auto omitted = client_->OpenSession(config);
+  ASSERT_TRUE(omitted.ok());
+  EXPECT_FALSE((*omitted)->opened().initial().has_amp_obs());
+}
+
+TEST_F(SimulationServerTest, BadSessionConfigsAreRejected) {
+  struct Case {
+    v1::SessionConfig config;
+    absl::StatusCode code;
+    std::string message;
+  };
+  std::vector<Case> cases;
+  cases.push_back({Config(0), absl::StatusCode::kInvalidArgument, "num_envs"});
+  cases.push_back({Config(65), absl::StatusCode::kResourceExhausted, "num_envs"});
+  v1::SessionConfig config = Config(2);
+  config.add_motions("deepmimic_walk");
+  config.add_motions("no_such_clip");
+  cases.push_back({config, absl::StatusCode::kNotFound, "no_such_clip"});
+  config = Config(2);
+  config.set_part_layout("6part");
+  cases.push_back({config, absl::StatusCode::kNotFound, "6part"});
+  config = Config(2);
+  config.set_termination_distance(std::nanf(""));
+  cases.push_back({config, absl::StatusCode::kInvalidArgument, "termination_distance"});
+  config = Config(2);
+  config.set_max_episode_steps(-3);
+  cases.push_back({config, absl::StatusCode::kInvalidArgument, "max_episode_steps"});
+  config = Config(2);
+  config.set_termination(static_cast<v1::TerminationMode>(17));
+  cases.push_back({config, absl::StatusCode::kInvalidArgument, "termination"});
+  for (const Case& c : cases) {
+    auto stream = client_->OpenSession(c.config);
+    ASSERT_FALSE(stream.ok()) << c.message;
+    EXPECT_EQ(stream.status().code(), c.code) << stream.status();
+    EXPECT_THAT(std::string(stream.status().message()), HasSubstr(c.message));
+  }
+}
+
+TEST_F(SimulationServerTest, FirstMessageMustBeTheConfig) {
+  v1::SimulateRequest actions;
+  actions.mutable_actions()->set_dtype(v1::FLOAT32);
+  grpc::Status status = RawSimulate(*server_, {actions});
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_THAT(status.error_message(), HasSubstr("config"));
+  status = RawSimulate(*server_, {});
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+}
+
+TEST_F(SimulationServerTest, BadActionsEndOnlyThatSession) {
+  auto healthy = client_->OpenSession(Config(2, 3));
+  ASSERT_TRUE(healthy.ok());
+  std::vector<float> zeros(2 * 69, 0.f);
+  auto expect_error = [&](const std::function<void(v1::SimulateRequest*)>& mutate, const std::string& needle) {
+    v1::SimulateRequest config;
+    *config.mutable_config() = Config(2);
+    v1::SimulateRequest step;
+    v1::Tensor* t = step.mutable_actions();
+    t->add_shape(2);
+    t->add_shape(69);
+    t->set_dtype(v1::FLOAT32);
+    t->set_data(std::string(reinterpret_cast<const char*>(zeros.data()), zeros.size() * 4));
+    mutate(&step);
+    grpc::Status status = RawSimulate(*server_, {config, step});
+    EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << needle;
+    EXPECT_THAT(status.error_message(), HasSubstr(needle));
+    // The healthy session keeps stepping.
+    ASSERT_TRUE((*healthy)->Step(zeros.data()).ok()) << needle;
+  };
+  expect_error([](v1::SimulateRequest* r) { r->mutable_actions()->set_shape(1, 68); }, "actions.shape");
+  expect_error([](v1::SimulateRequest* r) { r->mutable_actions()->set_dtype(v1::INT32); }, "actions.dtype");
+  expect_error([](v1::SimulateRequest* r) { r->mutable_actions()->mutable_data()->resize(100); }, "actions.data");
+  expect_error(
+      [](v1::SimulateRequest* r) {
+        const float nan = std::numeric_limits<float>::quiet_NaN();
+        std::memcpy(&(*r->mutable_actions()->mutable_data())[(69 + 4) * 4], &nan, 4);
+      },
+      "row 1");
+  expect_error(
+      [](v1::SimulateRequest* r) {
+        const float inf = std::numeric_limits<float>::infinity();
+        std::memcpy(&(*r->mutable_actions()->mutable_data())[0], &inf, 4);
+      },
+      "row 0");
+  expect_error([](v1::SimulateRequest* r) { *r->mutable_config() = Config(2); }, "actions");
+  EXPECT_TRUE((*healthy)->Close().ok());
+}
+
+TEST_F(SimulationServerTest, TooManySessionsIsResourceExhausted) {
+  std::vector<std::unique_ptr<SimulationStream>> open;
+  for (int s = 0; s < 3; ++s) {
+    auto stream = client_->OpenSession(Config(1));
+    ASSERT_TRUE(stream.ok()) << stream.status();
+    open.push_back(*std::move(stream));
+  }
+  auto fourth = client_->OpenSession(Config(1));
+  ASSERT_FALSE(fourth.ok());
+  EXPECT_EQ(fourth.status().code(), absl::StatusCode::kResourceExhausted);
+  EXPECT_THAT(std::string(fourth.status().message()), HasSubstr("max_sessions"));
+  ASSERT_TRUE(open.back()->Close().ok());
+  open.pop_back();
+  auto again = client_->OpenSession(Config(1));
+  EXPECT_TRUE(again.ok()) << again.status();
+}
+
+TEST_F(SimulationServerTest, TwoConcurrentSessions) {
+  auto run = [&](uint64_t seed, std::vector<float>* rewards) {
+    auto stream = client_->OpenSession(Config(4, seed));
+    ASSERT_TRUE(stream.ok());
+    std::vector<float> zeros(4 * 69, 0.f), reward;
+    for (int s = 0; s < 20; ++s) {
+      ASSERT_TRUE((*stream)->Step(zeros.data()).ok());
+      ASSERT_TRUE(DecodeFloatTensor((*stream)->result().reward(), "reward", &reward).ok());
+      rewards->insert(rewards->end(), reward.begin(), reward.end());
+    }
+    ASSERT_TRUE((*stream)->Close().ok());
+  };
+  std::vector<float> a, b, a_alone;
+  std::thread first([&] { run(5, &a); });
+  std::thread second([&] { run(6, &b); });
+  first.join();
+  second.join();
+  run(5, &a_alone);
+  EXPECT_EQ(a.size(), 80u);
+  EXPECT_EQ(a, a_alone);  // sessions do not disturb each other
+  EXPECT_NE(a, b);
+  auto stats = client_->GetStats();
+  ASSERT_TRUE(stats.ok());
+  EXPECT_EQ(stats->sessions_opened(), 3);
+  EXPECT_EQ(stats->env_steps(), 3 * 20 * 4);
+  EXPECT_EQ(stats->active_sessions(), 0);
+}
+
+// The body of the child process below: opens a session and steps until it is killed.
+TEST(ChildProcess, DISABLED_ClientThatNeverLeaves) {
+  const char* port = std::getenv("MODSKILL_TEST_PORT");
+  ASSERT_NE(port, nullptr);
+  ClientOptions options;
+  options.server = absl::StrCat("127.0.0.1:", port);
+  auto client = SimulationClient::Connect(options);
+  ASSERT_TRUE(client.ok());
+  auto stream = (*client)->OpenSession(Config(2));
+  ASSERT_TRUE(stream.ok());
+  std::vector<float> zeros(2 * 69, 0.f);
+  std::printf("session open\n");
+  std::fflush(stdout);
+  while ((*stream)->Step(zeros.data()).ok()) {
+  }
+}
+
+int ActiveSessions(SimulationClient& client) {
+  auto stats = client.GetStats();
+  return stats.ok() ? stats->active_sessions() : -1;
+}
+
+TEST_F(SimulationServerTest, ClientKilledMidStreamFreesItsEnvs) {
+  const std::string port = std::to_string(server_->port());
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    setenv("MODSKILL_TEST_PORT", port.c_str(), 1);
+    execl("/proc/self/exe", "simulation_server_test", "--gtest_also_run_disabled_tests",
+          "--gtest_filter=ChildProcess.DISABLED_ClientThatNeverLeaves", static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  // Wait until the child's session runs, then kill it without warning.
+  const absl::Time deadline = absl::Now() + absl::Seconds(20);
+  while (ActiveSessions(*client_) < 1 && absl::Now() < deadline) absl::SleepFor(absl::Milliseconds(20));
+  ASSERT_EQ(ActiveSessions(*client_), 1);
+  auto stats = client_->GetStats();
+  ASSERT_TRUE(stats.ok());
+  ASSERT_EQ(stats->sessions_size(), 1);
+  kill(child, SIGKILL);
+  waitpid(child, nullptr, 0);
+  const absl::Time killed = absl::Now();
+  while (ActiveSessions(*client_) != 0 && absl::Now() - killed < absl::Seconds(5)) absl::SleepFor(absl::Milliseconds(20));
+  EXPECT_EQ(ActiveSessions(*client_), 0) << "a killed client's session must be freed within a few seconds";
+  EXPECT_LT(absl::Now() - killed, absl::Seconds(5));
+  // And the server still serves.
+  auto stream = client_->OpenSession(Config(1));
+  EXPECT_TRUE(stream.ok());
+}
+
+TEST_F(SimulationServerTest, CancelledStreamFreesItsEnvs) {
+  auto stream = client_->OpenSession(Config(2));
+  ASSERT_TRUE(stream.ok());
+  ASSERT_EQ(ActiveSessions(*client_), 1);
+  (*stream)->Cancel();
+  const absl::Time start = absl::Now();
+  while (ActiveSessions(*client_) != 0 && absl::Now() - start < absl::Seconds(5)) absl::SleepFor(absl::Milliseconds(10));
+  EXPECT_EQ(ActiveSessions(*client_), 0);
+}
+
+TEST_F(SimulationServerTest, ReportFailuresValidatesAndStores) {
+  v1::SessionConfig config = Config(2);
+  config.add_motions("deepmimic_walk");
+  config.add_motions("deepmimic_run");
+  auto stream = client_->OpenSession(config);
+  ASSERT_TRUE(stream.ok());
+  v1::ReportFailuresRequest request;
+  request.set_session_id((*stream)->opened().session_id());
+  v1::ClipFailure* failure = request.add_failures();
+  failure->set_clip("deepmimic_run");
+  failure->set_frame(7);
+  failure->set_terminated(true);
+  for (float e : {0.1f, 0.2f, 0.3f, 0.05f, 0.05f}) failure->add_part_errors(e);
+  v1::ClipFailure* success = request.add_failures();
+  success->set_clip("deepmimic_walk");
+  success->set_frame(-1);
+  auto state = client_->ReportFailures(request);
+  ASSERT_TRUE(state.ok()) << state.status();
+  ASSERT_EQ(state->clips_size(), 2);
+  EXPECT_EQ(state->clips(1).clip(), "deepmimic_run");
+  EXPECT_EQ(state->clips(1).failures(), 1);
+  EXPECT_EQ(state->clips(1).last_failed_frame(), 7);
+  EXPECT_NEAR(state->clips(1).mean_part_errors(2), 0.3f, 1e-6);
+  EXPECT_EQ(state->clips(0).successes(), 1);
+  EXPECT_NEAR(state->clips(0).probability() + state->clips(1).probability(), 1.0, 1e-9);
+  EXPECT_EQ(state->reports(), 2);
+
+  auto expect = [&](v1::ReportFailuresRequest bad, absl::StatusCode code, const std::string& needle) {
+    auto result = client_->ReportFailures(bad);
+    ASSERT_FALSE(result.ok()) << needle;
+    EXPECT_EQ(result.status().code(), code) << result.status();
+    EXPECT_THAT(std::string(result.status().message()), HasSubstr(needle));
+  };
+  v1::ReportFailuresRequest bad = request;
+  bad.set_session_id("s999");
+  expect(bad, absl::StatusCode::kNotFound, "session_id");
+  bad = request;
+  bad.mutable_failures(1)->set_clip("deepmimic_backflip");  // in the library, not in the session
+  expect(bad, absl::StatusCode::kNotFound, "failures[1].clip");
+  bad = request;
+  bad.mutable_failures(0)->add_part_errors(0.1f);
+  expect(bad, absl::StatusCode::kInvalidArgument, "failures[0].part_errors");
+  bad = request;
+  bad.mutable_failures(0)->set_part_errors(1, std::nanf(""));
+  expect(bad, absl::StatusCode::kInvalidArgument, "failures[0].part_errors[1]");
+  bad = request;
+  bad.mutable_failures(0)->set_frame(100000);
+  expect(bad, absl::StatusCode::kInvalidArgument, "failures[0].frame");
+  // Rejected reports recorded nothing.
+  auto unchanged = client_->ReportFailures(request);
+  ASSERT_TRUE(unchanged.ok());
+  EXPECT_EQ(unchanged->clips(1).failures(), 2);
+  EXPECT_EQ(unchanged->reports(), 4);
+}
+
+TEST_F(SimulationServerTest, RolloutRunsATorchScriptCheckpoint) {
+  v1::RolloutRequest request;
+  request.set_checkpoint_path(ZeroPolicy());
+  request.add_clips("deepmimic_walk");
+  request.add_clips("cmu_02_01");
+  request.set_stream_frames(true);
+  int frames = 0;
+  auto metrics = client_->Rollout(request, [&](const v1::RolloutFrame& frame) {
+    ++frames;
+    EXPECT_EQ(frame.sim_body_pos().shape(0), 24);
+    EXPECT_EQ(frame.ref_body_pos().data().size(), 24u * 3 * 4);
+  });
+  ASSERT_TRUE(metrics.ok()) << metrics.status();
+  ASSERT_EQ(metrics->size(), 2u);
+  int steps = 0;
+  for (const v1::ClipMetrics& clip : *metrics) {
+    steps += clip.steps() + 1;
+    EXPECT_GT(clip.g_mpjpe_mm(), 0);
+    EXPECT_GE(clip.g_mpjpe_mm(), 0.5 * clip.mpjpe_mm());
+    EXPECT_EQ(clip.body_error_mm_size(), 24);
+    EXPECT_EQ(clip.part_error_mm_size(), 5);
+  }
+  EXPECT_EQ(frames, steps);
+  // The zero policy holds joints at their range midpoints: it falls, so it fails.
+  EXPECT_FALSE((*metrics)[0].success());
+  // The same checkpoint as bytes.
+  v1::RolloutRequest by_bytes;
+  by_bytes.set_checkpoint_bytes(*ReadFileToString(ZeroPolicy(), 1 << 30));
+  by_bytes.add_clips("deepmimic_walk");
+  auto again = client_->Rollout(by_bytes);
+  ASSERT_TRUE(again.ok()) << again.status();
+  EXPECT_EQ((*again)[0].steps(), (*metrics)[0].steps());
+  EXPECT_DOUBLE_EQ((*again)[0].g_mpjpe_mm(), (*metrics)[0].g_mpjpe_mm());
+}
+
+TEST_F(SimulationServerTest, RolloutBadInputs) {
+  auto expect = [&](const v1::RolloutRequest& request, absl::StatusCode code, const std::string& needle) {
+    auto result = client_->Rollout(request);
+    ASSERT_FALSE(result.ok()) << needle;
+    EXPECT_EQ(result.status().code(), code) << result.status();
+    EXPECT_THAT(std::string(result.status().message()), HasSubstr(needle));
+  };
+  v1::RolloutRequest request;
+  expect(request, absl::StatusCode::kInvalidArgument, "checkpoint");
+  request.set_checkpoint_path(TempDir() + "/missing.pt");
+  expect(request, absl::StatusCode::kNotFound, "missing.pt");
+  const std::string garbage = TempDir() + "/garbage.pt";
+  ASSERT_TRUE(WriteFileAtomically(garbage, "this is not a zip archive").ok());
+  request.set_checkpoint_path(garbage);
+  expect(request, absl::StatusCode::kInvalidArgument, "TorchScript");
+  request.set_checkpoint_bytes(std::string(1000, 'x'));
+  expect(request, absl::StatusCode::kInvalidArgument, "TorchScript");
+  request.set_checkpoint_path(ZeroPolicy("3part"));  // trained with another layout: fine, the server offers it
+  request.add_clips("deepmimic_walk");
+  EXPECT_TRUE(client_->Rollout(request).ok());
+  // A checkpoint for another observation size.
+  auto catalog = PartLayoutCatalog::LoadDefault(DefaultSpec());
+  auto humanoid = HumanoidModel::Create(DefaultSpec(), PhysicsOptions());
+  PolicySpec other = PolicySpec::FromEnvSpec(MakeEnvSpec(**humanoid, *catalog->Get("5part")));
+  other.obs_size = 100;
+  const std::string mismatched = TempDir() + "/mismatched.pt";
+  ASSERT_TRUE(SaveAffinePolicy(mismatched, other, {}, {}).ok());
+  request.set_checkpoint_path(mismatched);
+  expect(request, absl::StatusCode::kFailedPrecondition, "obs_size");
+  request.set_checkpoint_path(ZeroPolicy());
+  request.add_clips("not_a_clip");
+  expect(request, absl::StatusCode::kNotFound, "clips[1]");
+}
+
+TEST_F(SimulationServerTest, AddMotionsUploadsAndValidates) {
+  auto walk = ReadFileToString(std::string(MODSKILL_REPO_DIR) + "/data/motions/source/deepmimic/humanoid3d_walk.txt", 1 << 20);
+  ASSERT_TRUE(walk.ok());
+  v1::AddMotionsRequest request;
+  v1::MotionUpload* upload = request.add_uploads();
+  upload->set_file_name("humanoid3d_walk.txt");
+  upload->set_data(*walk);
+  upload->set_name("uploaded_walk");
+  upload->set_label("a person walks (uploaded)");
+  auto added = client_->AddMotions(request);
+  ASSERT_TRUE(added.ok()) << added.status();
+  ASSERT_EQ(added->added_size(), 1);
+  EXPECT_EQ(added->added(0).name(), "uploaded_walk");
+  auto listed = client_->ListMotions();
+  ASSERT_TRUE(listed.ok());
+  EXPECT_EQ(listed->motions_size(), DefaultMotions()->size() + 1);
+  v1::SessionConfig config = Config(1);
+  config.add_motions("uploaded_walk");
+  EXPECT_TRUE(client_->OpenSession(config).ok());
+  // The same name again is rejected, and nothing changes.
+  auto duplicate = client_->AddMotions(request);
+  ASSERT_FALSE(duplicate.ok());
+  EXPECT_EQ(duplicate.status().code(), absl::StatusCode::kAlreadyExists);
+  // Corrupt content names the upload.
+  v1::AddMotionsRequest corrupt;
+  corrupt.add_uploads()->set_file_name("broken.npz");
+  corrupt.mutable_uploads(0)->set_data("PK\x03\x04 not really");
+  auto broken = client_->AddMotions(corrupt);
+  ASSERT_FALSE(broken.ok());
+  EXPECT_EQ(broken.status().code(), absl::StatusCode::kInvalidArgument) << broken.status();
+  EXPECT_THAT(std::string(broken.status().message()), HasSubstr("broken.npz"));
+  EXPECT_THAT(std::string(broken.status().message()), ::testing::Not(HasSubstr("modskill-upload")));
+  v1::AddMotionsRequest unknown;
+  unknown.add_uploads()->set_file_name("clip.fbx");
+  unknown.mutable_uploads(0)->set_data("xyz");
+  auto fbx = client_->AddMotions(unknown);
+  ASSERT_FALSE(fbx.ok());
+  EXPECT_THAT(std::string(fbx.status().message()), HasSubstr(".fbx"));
+  v1::AddMotionsRequest oversized;
+  oversized.add_uploads()->set_file_name("big.txt");
+  oversized.mutable_uploads(0)->set_data(std::string((1 << 20) + 1, ' '));
+  auto big = client_->AddMotions(oversized);
+  ASSERT_FALSE(big.ok());
+  EXPECT_EQ(big.status().code(), absl::StatusCode::kResourceExhausted);
+  EXPECT_THAT(std::string(big.status().message()), HasSubstr("max_upload_mb"));
+  v1::AddMotionsRequest sneaky;
+  sneaky.add_uploads()->set_file_name("../../etc/passwd.txt");
+  sneaky.mutable_uploads(0)->set_data(*walk);
+  auto traversal = client_->AddMotions(sneaky);
+  ASSERT_TRUE(traversal.ok()) << traversal.status();  // stored under its base name only
+  EXPECT_EQ(traversal->added(0).name(), "passwd");
+  auto empty = client_->AddMotions(v1::AddMotionsRequest());
+  ASSERT_FALSE(empty.ok());
+  EXPECT_EQ(empty.status().code(), absl::StatusCode::kInvalidArgument);
+}
+
+TEST(SimulationServerAuthTest, TokenIsRequiredWhenConfigured) {
+  ServerOptions options;
+  options.service.auth_token = "s3cret-token";
+  auto server = StartTestServer(options);
+  ASSERT_NE(server, nullptr);
+  for (const std::string& token : {std::string(), std::string("wrong-token")}) {
+    auto client = ConnectTo(*server, token);
+    ASSERT_NE(client, nullptr);
+    auto spec = client->Describe();
+    ASSERT_FALSE(spec.ok());
+    EXPECT_EQ(spec.status().code(), absl::StatusCode::kUnauthenticated);
+    auto stream = client->OpenSession(Config(1));
+    ASSERT_FALSE(stream.ok());
+    EXPECT_EQ(stream.status().code(), absl::StatusCode::kUnauthenticated);
+    EXPECT_EQ(client->GetStats().status().code(), absl::StatusCode::kUnauthenticated);
+    EXPECT_EQ(client->ListMotions().status().code(), absl::StatusCode::kUnauthenticated);
+  }
+  auto good = ConnectTo(*server, "s3cret-token");
+  EXPECT_TRUE(good->Describe().ok());
+  auto stream = good->OpenSession(Config(1));
+  ASSERT_TRUE(stream.ok());
+  std::vector<float> zeros(69, 0.f);
+  EXPECT_TRUE((*stream)->Step(zeros.data()).ok());
+  // Without a configured token, no header is needed.
+  auto open = StartTestServer();
+  EXPECT_TRUE(ConnectTo(*open)->Describe().ok());
+}
+
+}  // namespace
+}  // namespace modskill
