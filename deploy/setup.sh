@@ -8,7 +8,9 @@ cd "$(dirname "$0")/.."
 PACKAGES=(
   build-essential cmake ccache pkg-config
   libmujoco-dev libqhull-dev libeigen3-dev libabsl-dev zlib1g-dev nlohmann-json3-dev
+  libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler libtorch-dev
   libgtest-dev libgmock-dev
+  python3-grpcio python3-numpy python3-matplotlib
 )
 
 missing=()

@@ -1,0 +1,433 @@
+"""The modskill client: one method per RPC of ``modskill.v1.Simulation``, returning numpy arrays.
+
+Example::
+
+    import numpy as np
+    import modskill
+
+    with modskill.Client("127.0.0.1:50051") as client:
+        spec = client.describe()
+        with client.session(num_envs=64, seed=1) as session:
+            result = session.initial
+            for _ in range(100):
+                actions = np.zeros((session.num_envs, spec.action_size), np.float32)
+                result = session.step(actions)
+            legs = session.part_obs(result.obs, "L_Leg")
+
+Every failed call raises :class:`modskill.ServerError` with the gRPC status code and the
+server's message (which names the offending field); bad arguments caught before sending raise
+``ValueError``.
+"""
+
+from __future__ import annotations
+
+import os
+import queue
+import threading
+import weakref
+from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Union
+
+import grpc
+import numpy as np
+
+from . import tensors
+from .errors import ConnectError, ServerError
+from .types import ClipRollout, EnvSpec, StepResult, message_to_dict
+from .v1 import modskill_pb2 as pb
+from .v1 import modskill_pb2_grpc as pb_grpc
+
+__all__ = ["Client", "Session", "read_token_file"]
+
+PathLike = Union[str, "os.PathLike[str]"]
+
+_TERMINATION = {"training": pb.TRAINING, "evaluation": pb.EVALUATION, "none": pb.NONE}
+_AMP_OBS = {"full": pb.FULL, "newest": pb.NEWEST, "omit": pb.OMIT}
+
+
+def _enum(value: Union[str, int], table: Mapping[str, int], what: str) -> int:
+    if isinstance(value, str):
+        key = value.strip().lower()
+        if key not in table:
+            raise ValueError(f"{what}: {value!r} is not one of {', '.join(table)}")
+        return table[key]
+    if int(value) not in table.values():
+        raise ValueError(f"{what}: {value!r} is not one of {', '.join(table)}")
+    return int(value)
+
+
+def read_token_file(path: PathLike) -> str:
+    """Reads a bearer token file (surrounding whitespace stripped); ValueError if it is empty."""
+    with open(path, "r", encoding="utf-8") as f:
+        token = f.read().strip()
+    if not token:
+        raise ValueError(f"token_file: {os.fspath(path)} is empty")
+    return token
+
+
+class Client:
+    """A connection to a modskill simulation server.
+
+    Args:
+      server: ``host:port`` of the server.
+      token: bearer token, sent as ``authorization: Bearer <token>`` with every call.
+      token_file: or a file holding the token (exclusive with ``token``).
+      tls_ca: PEM file of root certificates: connect with TLS (the server runs with
+        ``--tls_cert``/``--tls_key``). Without it the channel is plaintext.
+      tls_server_name: overrides the host name checked in the server certificate.
+      max_message_mb: largest message sent or received, MiB (match the server's
+        ``--max_message_mb`` for big batches).
+      timeout: seconds to wait for the server at construction, and the deadline of every unary
+        call (``describe``, ``motions``, ``stats``, ``add_motions``, ``report_failures``).
+        Sessions and rollouts have no deadline.
+
+    Raises:
+      ConnectError: no server answered within ``timeout`` seconds.
+
+    The client is a context manager; ``close()`` ends its open sessions and the channel.
+    """
+
+    def __init__(self, server: str = "127.0.0.1:50051", token: Optional[str] = None,
+                 token_file: Optional[PathLike] = None, tls_ca: Optional[PathLike] = None,
+                 max_message_mb: int = 512, timeout: float = 10.0, tls_server_name: Optional[str] = None):
+        if token is not None and token_file is not None:
+            raise ValueError("token and token_file: pass at most one")
+        if token_file is not None:
+            token = read_token_file(token_file)
+        if max_message_mb < 1:
+            raise ValueError(f"max_message_mb: {max_message_mb} must be >= 1")
+        self.server = server
+        self.timeout = timeout
+        self._metadata = (("authorization", f"Bearer {token}"),) if token else ()
+        max_bytes = min(int(max_message_mb) << 20, 2**31 - 1)
+        options = [("grpc.max_send_message_length", max_bytes), ("grpc.max_receive_message_length", max_bytes)]
+        if tls_ca is not None:
+            with open(tls_ca, "rb") as f:
+                credentials = grpc.ssl_channel_credentials(root_certificates=f.read())
+            if tls_server_name:
+                options.append(("grpc.ssl_target_name_override", tls_server_name))
+            self._channel = grpc.secure_channel(server, credentials, options=options)
+        else:
+            self._channel = grpc.insecure_channel(server, options=options)
+        self._sessions: "weakref.WeakSet[Session]" = weakref.WeakSet()
+        try:
+            grpc.channel_ready_future(self._channel).result(timeout=timeout)
+        except grpc.FutureTimeoutError:
+            self._channel.close()
+            raise ConnectError(grpc.StatusCode.UNAVAILABLE,
+                               f"no modskill server answered within {timeout:g} s"
+                               f"{' (TLS)' if tls_ca is not None else ''}", server) from None
+        self._stub = pb_grpc.SimulationStub(self._channel)
+
+    # -- plumbing ------------------------------------------------------------------------------
+
+    def _unary(self, rpc: str, request, timeout: Optional[float] = None):
+        try:
+            return getattr(self._stub, rpc)(request, metadata=self._metadata,
+                                            timeout=self.timeout if timeout is None else timeout)
+        except grpc.RpcError as e:
+            raise ServerError.from_rpc_error(e, self.server, rpc) from None
+
+    def close(self) -> None:
+        """Closes the open sessions and the channel."""
+        for session in list(self._sessions):
+            session.close(raise_errors=False)
+        self._channel.close()
+
+    def __enter__(self) -> "Client":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def __repr__(self) -> str:
+        return f"modskill.Client({self.server!r})"
+
+    # -- RPCs ----------------------------------------------------------------------------------
+
+    def describe(self, part_layout: str = "") -> EnvSpec:
+        """The env spec of a part layout ('' : the server's default, 5 parts)."""
+        return EnvSpec.from_proto(self._unary("Describe", pb.DescribeRequest(part_layout=part_layout)))
+
+    def motions(self) -> List[Dict[str, Any]]:
+        """The server's clip library: one dict per clip with name, frames, fps, duration, label,
+        humanml3d_id and source."""
+        return [message_to_dict(m) for m in self._unary("ListMotions", pb.ListMotionsRequest()).motions]
+
+    def stats(self) -> Dict[str, Any]:
+        """Server counters (``ServerStats``) as a dict; ``stats()["sessions"]`` lists the open
+        sessions (session_id, peer, num_envs, steps, steps_per_second, ...)."""
+        return message_to_dict(self._unary("GetStats", pb.GetStatsRequest()))
+
+    def add_motions(self, paths: Union[PathLike, Sequence[PathLike]], names: Optional[Sequence[str]] = None,
+                    labels: Optional[Sequence[str]] = None, timeout: Optional[float] = None) -> List[Dict[str, Any]]:
+        """Uploads clip files (.npz .bvh .txt .msclip, picked by extension) to the library.
+
+        They are available to sessions opened afterwards. ``names`` and ``labels`` optionally
+        give each file's clip name and text label. Returns the added clips as dicts (like
+        ``motions()``).
+        """
+        if isinstance(paths, (str, os.PathLike)):
+            paths = [paths]
+        paths = list(paths)
+        for what, values in (("names", names), ("labels", labels)):
+            if values is not None and len(values) != len(paths):
+                raise ValueError(f"{what}: {len(values)} values for {len(paths)} paths")
+        request = pb.AddMotionsRequest()
+        for i, path in enumerate(paths):
+            with open(path, "rb") as f:
+                data = f.read()
+            request.uploads.add(file_name=os.path.basename(os.fspath(path)), data=data,
+                                name=names[i] if names else "", label=labels[i] if labels else "")
+        return [message_to_dict(m) for m in self._unary("AddMotions", request, timeout).added]
+
+    def report_failures(self, session_id: str, failures: Iterable[Union[Mapping[str, Any], pb.ClipFailure]]
+                        ) -> Dict[str, Any]:
+        """Reports a session's failed (or, with ``terminated=False``, succeeded) clips to its sampler.
+
+        Each failure is a ``modskill.v1.ClipFailure`` or a dict with ``clip`` and optionally
+        ``frame`` (-1: unknown), ``part_errors`` (one mean body error per part, m) and
+        ``terminated`` (default True). Returns the sampler state as a dict: session_id, reports
+        and ``clips`` (clip, weight, probability, failures, successes, ...).
+        """
+        request = pb.ReportFailuresRequest(session_id=session_id)
+        for i, failure in enumerate(failures):
+            if isinstance(failure, pb.ClipFailure):
+                request.failures.append(failure)
+                continue
+            unknown = set(failure) - {"clip", "frame", "part_errors", "terminated"}
+            if unknown or "clip" not in failure:
+                raise ValueError(f"failures[{i}]: needs 'clip' and takes frame, part_errors, terminated "
+                                 f"(got {sorted(failure)})")
+            request.failures.add(clip=failure["clip"], frame=int(failure.get("frame", -1)),
+                                 part_errors=[float(e) for e in failure.get("part_errors", ())],
+                                 terminated=bool(failure.get("terminated", True)))
+        return message_to_dict(self._unary("ReportFailures", request))
+
+    def rollout(self, checkpoint: Optional[PathLike] = None, checkpoint_bytes: Optional[bytes] = None,
+                clips: Sequence[str] = (), frames: bool = False, *, server_checkpoint: Optional[str] = None,
+                termination: Union[str, int] = "evaluation", termination_distance: float = 0.0,
+                max_steps_per_clip: int = 0, timeout: Optional[float] = None) -> List[ClipRollout]:
+        """Runs a TorchScript policy checkpoint on clips and returns one :class:`ClipRollout` per clip.
+
+        Give exactly one of:
+          checkpoint: a local checkpoint file; the client reads it and uploads its bytes, so
+            this works with remote servers.
+          checkpoint_bytes: the archive itself.
+          server_checkpoint: a path the *server* can read.
+
+        Args:
+          clips: clip names; empty: every clip of the library.
+          frames: also return per-step simulated and reference body positions
+            (``ClipRollout.sim_body_pos`` / ``ref_body_pos``, float32 [T, num_bodies, 3]).
+          termination: "evaluation" (default: mean body error above 0.5 m), "training" or "none".
+          termination_distance: metres; 0: the mode's default.
+          max_steps_per_clip: 0: the clip's length.
+          timeout: deadline in seconds (default: none).
+        """
+        given = [x is not None for x in (checkpoint, checkpoint_bytes, server_checkpoint)]
+        if sum(given) != 1:
+            raise ValueError("rollout: pass exactly one of checkpoint, checkpoint_bytes, server_checkpoint")
+        if isinstance(clips, str):
+            clips = [clips]
+        request = pb.RolloutRequest(clips=list(clips), stream_frames=bool(frames),
+                                    termination=_enum(termination, _TERMINATION, "termination"),
+                                    termination_distance=termination_distance,
+                                    max_steps_per_clip=max_steps_per_clip)
+        if checkpoint is not None:
+            with open(checkpoint, "rb") as f:
+                request.checkpoint_bytes = f.read()
+        elif checkpoint_bytes is not None:
+            request.checkpoint_bytes = bytes(checkpoint_bytes)
+        else:
+            request.checkpoint_path = server_checkpoint
+        results: List[ClipRollout] = []
+        frame_rows: Dict[str, List[tuple]] = {}
+        try:
+            for response in self._stub.Rollout(request, metadata=self._metadata, timeout=timeout):
+                kind = response.WhichOneof("kind")
+                if kind == "frame":
+                    f = response.frame
+                    frame_rows.setdefault(f.clip, []).append(
+                        (f.frame, tensors.decode(f.sim_body_pos, "sim_body_pos"),
+                         tensors.decode(f.ref_body_pos, "ref_body_pos")))
+                elif kind == "metrics":
+                    results.append(ClipRollout.from_proto(response.metrics))
+        except grpc.RpcError as e:
+            raise ServerError.from_rpc_error(e, self.server, "Rollout") from None
+        if frames:
+            for result in results:
+                rows = frame_rows.get(result.clip, [])
+                if rows:
+                    result.frames = np.array([r[0] for r in rows], dtype=np.int32)
+                    result.sim_body_pos = np.stack([r[1] for r in rows])
+                    result.ref_body_pos = np.stack([r[2] for r in rows])
+                else:
+                    result.frames = np.zeros((0,), np.int32)
+                    result.sim_body_pos = np.zeros((0, len(result.body_error_mm), 3), np.float32)
+                    result.ref_body_pos = np.zeros((0, len(result.body_error_mm), 3), np.float32)
+        return results
+
+    def session(self, num_envs: int, seed: int = 0, part_layout: str = "", motions: Sequence[str] = (),
+                termination: Union[str, int] = "training", amp_obs: Union[str, int] = "full", *,
+                termination_distance: float = 0.0, max_episode_steps: int = 0) -> "Session":
+        """Opens a simulation session of ``num_envs`` envs and returns it once the server has
+        reset them (``Session.initial`` holds the first observations).
+
+        Args:
+          num_envs: envs stepped together (rows of every array).
+          seed: seeds clip and start-frame sampling.
+          part_layout: '' : the server's default.
+          motions: clip names the session samples from; empty: the whole library.
+          termination: "training" (any body farther than 0.25 m ends the episode),
+            "evaluation" (mean body error above 0.5 m) or "none" (only the clip's end).
+          amp_obs: "full" (``amp_history`` frames per env, newest first), "newest" or "omit".
+          termination_distance: metres; 0: the mode's default.
+          max_episode_steps: 0: until the clip ends.
+
+        Use it as a context manager (or call ``close()``) so that the server frees the envs.
+        """
+        if isinstance(motions, str):
+            motions = [motions]
+        config = pb.SessionConfig(num_envs=int(num_envs), seed=int(seed), part_layout=part_layout,
+                                  motions=list(motions), termination=_enum(termination, _TERMINATION, "termination"),
+                                  termination_distance=termination_distance,
+                                  max_episode_steps=int(max_episode_steps),
+                                  amp_obs=_enum(amp_obs, _AMP_OBS, "amp_obs"))
+        session = Session(self, config)
+        self._sessions.add(session)
+        return session
+
+
+_END = object()  # ends the request stream
+
+
+class Session:
+    """One open ``Simulate`` stream (see :meth:`Client.session`).
+
+    Attributes:
+      session_id: the server's id (for ``report_failures`` and ``stats``).
+      spec: the :class:`EnvSpec` of the session's layout (``num_motions``: the session's clips).
+      clip_names: the session's clips; ``StepResult.clip_id`` indexes this list.
+      initial: the :class:`StepResult` after the first reset (step 0).
+      last: the latest result (``initial`` before the first step).
+      num_envs: rows of every batch.
+    """
+
+    def __init__(self, client: Client, config: pb.SessionConfig):
+        self._client = client
+        self._requests: "queue.Queue[object]" = queue.Queue()
+        self._lock = threading.Lock()
+        self._closed = False
+        self._error: Optional[ServerError] = None
+        self.num_envs = config.num_envs
+        self._requests.put(pb.SimulateRequest(config=config))
+        self._responses = client._stub.Simulate(iter(self._requests.get, _END), metadata=client._metadata)
+        opened = self._receive("opened").opened
+        self.session_id: str = opened.session_id
+        self.spec = EnvSpec.from_proto(opened.spec)
+        self.clip_names: List[str] = list(opened.clip_names)
+        self.initial = StepResult.from_proto(opened.initial)
+        self.last = self.initial
+        self._action_shape = (self.num_envs, self.spec.action_size)
+
+    def _fail(self, error: ServerError) -> ServerError:
+        self._error = error
+        self._closed = True
+        self._requests.put(_END)
+        return error
+
+    def _receive(self, kind: str) -> pb.SimulateResponse:
+        try:
+            response = next(self._responses)
+        except grpc.RpcError as e:
+            raise self._fail(ServerError.from_rpc_error(e, self._client.server, "Simulate")) from None
+        except StopIteration:
+            raise self._fail(ServerError(grpc.StatusCode.INTERNAL, "the server ended the session stream",
+                                         self._client.server, "Simulate")) from None
+        if response.WhichOneof("kind") != kind:
+            raise self._fail(ServerError(grpc.StatusCode.INTERNAL,
+                                         f"expected a '{kind}' reply, got '{response.WhichOneof('kind')}'",
+                                         self._client.server, "Simulate"))
+        return response
+
+    def check_actions(self, actions: np.ndarray) -> np.ndarray:
+        """Returns ``actions`` as a C-contiguous little-endian float32 [num_envs, action_size] array.
+
+        Raises ValueError on a wrong shape, a non-float dtype or non-finite values.
+        """
+        actions = np.asarray(actions)
+        if actions.shape != self._action_shape:
+            raise ValueError(f"actions: shape {list(actions.shape)}, expected [num_envs, action_size] = "
+                             f"{list(self._action_shape)}")
+        if actions.dtype.kind != "f":
+            raise ValueError(f"actions: dtype {actions.dtype}, expected a float dtype (sent as float32)")
+        actions = np.ascontiguousarray(actions, dtype="<f4")
+        finite = np.isfinite(actions)
+        if not finite.all():
+            row, col = np.argwhere(~finite)[0]
+            raise ValueError(f"actions: non-finite value {actions[row, col]} at [{row}, {col}]")
+        return actions
+
+    def step(self, actions: np.ndarray) -> StepResult:
+        """Sends a batch of actions (float [num_envs, action_size], clipped to [-1, 1] by the
+        server) and returns the resulting :class:`StepResult`."""
+        actions = self.check_actions(actions)
+        with self._lock:
+            if self._closed:
+                raise RuntimeError(f"session {self.session_id}: closed"
+                                   + (f" after an error ({self._error})" if self._error else ""))
+            request = pb.SimulateRequest()
+            tensors.encode(actions, request.actions)
+            self._requests.put(request)
+            self.last = StepResult.from_proto(self._receive("step").step)
+            return self.last
+
+    def part_obs(self, obs: np.ndarray, part: str) -> np.ndarray:
+        """The columns of ``obs`` that belong to body part ``part`` (see ``spec.parts``)."""
+        return self.spec.part_obs(obs, part)
+
+    def report_failures(self, failures) -> Dict[str, Any]:
+        """``Client.report_failures`` for this session."""
+        return self._client.report_failures(self.session_id, failures)
+
+    @property
+    def closed(self) -> bool:
+        return self._closed
+
+    def close(self, raise_errors: bool = True) -> None:
+        """Ends the stream; the server frees the envs. Idempotent.
+
+        With ``raise_errors`` a final error status of the server raises :class:`ServerError`.
+        """
+        with self._lock:
+            if self._closed:
+                return
+            self._closed = True
+            self._requests.put(_END)
+            try:
+                for _ in self._responses:  # drains to the final status
+                    pass
+            except grpc.RpcError as e:
+                if e.code() == grpc.StatusCode.CANCELLED:
+                    return
+                self._error = ServerError.from_rpc_error(e, self._client.server, "Simulate")
+                if raise_errors:
+                    raise self._error from None
+
+    def __enter__(self) -> "Session":
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        self.close(raise_errors=exc_type is None)
+
+    def __del__(self):
+        try:
+            if not self._closed:
+                self._requests.put(_END)
+                self._responses.cancel()
+        except Exception:
+            pass
+
+    def __repr__(self) -> str:
+        state = "closed" if self._closed else f"step {self.last.step}"
+        return f"modskill.Session({self.session_id!r}, {self.num_envs} envs, {self.spec.part_layout}, {state})"

@@ -1,0 +1,252 @@
+"""Plain Python views of the server's messages: the env spec, step results and rollouts.
+
+Sizes are never hard-coded on the client: everything here is built from what the server sends
+(``Describe``, ``SessionOpened``), so a client keeps working when the observation or the part
+layout changes.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Dict, List, Optional, Tuple
+
+import numpy as np
+
+from . import tensors
+from .v1 import modskill_pb2 as pb
+
+__all__ = ["BodyPart", "EnvSpec", "StepResult", "ClipRollout", "message_to_dict"]
+
+
+@dataclasses.dataclass(frozen=True)
+class BodyPart:
+    """One body part of a layout.
+
+    ``obs`` and ``action`` are Python ``slice`` objects, so ``obs[:, part.obs]`` is this part's
+    observation columns and ``actions[:, part.action]`` its action columns.
+    """
+
+    name: str
+    bodies: Tuple[str, ...]  # in observation order
+    obs: slice
+    action: slice
+
+    @property
+    def obs_size(self) -> int:
+        return self.obs.stop - self.obs.start
+
+    @property
+    def action_size(self) -> int:
+        return self.action.stop - self.action.start
+
+
+@dataclasses.dataclass(frozen=True)
+class EnvSpec:
+    """The observation and action layout of a part layout (``Describe`` / ``Session.spec``)."""
+
+    part_layout: str
+    parts: Tuple[BodyPart, ...]
+    obs_size: int
+    self_obs_size: int
+    task_obs_size: int
+    action_size: int
+    amp_obs_per_frame: int
+    amp_history: int  # frames in a full AMP observation, newest first
+    body_names: Tuple[str, ...]  # MuJoCo order (the order of rollout body positions)
+    joint_names: Tuple[str, ...]  # hinges in action order
+    control_dt: float  # seconds per step
+    part_layouts: Tuple[str, ...]  # layouts the server offers (Describe only)
+    reward_terms: Tuple[str, ...]  # columns of StepResult.reward_terms
+    num_motions: int
+    action_offset: np.ndarray = dataclasses.field(repr=False, compare=False)  # PD target = offset + scale * a
+    action_scale: np.ndarray = dataclasses.field(repr=False, compare=False)
+
+    @classmethod
+    def from_proto(cls, spec: pb.EnvSpec) -> "EnvSpec":
+        parts = tuple(
+            BodyPart(
+                name=p.name,
+                bodies=tuple(p.bodies),
+                obs=slice(p.obs.start, p.obs.start + p.obs.size),
+                action=slice(p.action.start, p.action.start + p.action.size),
+            )
+            for p in spec.parts)
+        return cls(
+            part_layout=spec.part_layout,
+            parts=parts,
+            obs_size=spec.obs_size,
+            self_obs_size=spec.self_obs_size,
+            task_obs_size=spec.task_obs_size,
+            action_size=spec.action_size,
+            amp_obs_per_frame=spec.amp_obs_per_frame,
+            amp_history=spec.amp_history,
+            body_names=tuple(spec.body_names),
+            joint_names=tuple(spec.joint_names),
+            control_dt=spec.control_dt,
+            part_layouts=tuple(spec.part_layouts),
+            reward_terms=tuple(spec.reward_terms),
+            num_motions=spec.num_motions,
+            action_offset=np.array(spec.action_offset, dtype=np.float32),
+            action_scale=np.array(spec.action_scale, dtype=np.float32),
+        )
+
+    @property
+    def part_names(self) -> Tuple[str, ...]:
+        return tuple(p.name for p in self.parts)
+
+    @property
+    def amp_obs_size(self) -> int:
+        """Columns of a full AMP observation (``amp_obs="full"``)."""
+        return self.amp_obs_per_frame * self.amp_history
+
+    def part(self, name: str) -> BodyPart:
+        """The part called ``name``; KeyError listing the layout's parts otherwise."""
+        for p in self.parts:
+            if p.name == name:
+                return p
+        raise KeyError(f"part {name!r} is not in layout {self.part_layout!r} (parts: {', '.join(self.part_names)})")
+
+    def part_obs(self, obs: np.ndarray, part: str) -> np.ndarray:
+        """The columns of ``obs`` (``[..., obs_size]``) that belong to ``part`` (a view)."""
+        obs = np.asarray(obs)
+        if obs.shape[-1:] != (self.obs_size,):
+            raise ValueError(f"obs: shape {list(obs.shape)}, expected [..., {self.obs_size}]")
+        return obs[..., self.part(part).obs]
+
+    def part_action(self, actions: np.ndarray, part: str) -> np.ndarray:
+        """The columns of ``actions`` (``[..., action_size]``) that belong to ``part`` (a view)."""
+        actions = np.asarray(actions)
+        if actions.shape[-1:] != (self.action_size,):
+            raise ValueError(f"actions: shape {list(actions.shape)}, expected [..., {self.action_size}]")
+        return actions[..., self.part(part).action]
+
+    def pd_targets(self, actions: np.ndarray) -> np.ndarray:
+        """Joint PD targets (rad) for actions in [-1, 1]: offset + scale * clip(actions)."""
+        return self.action_offset + self.action_scale * np.clip(actions, -1.0, 1.0)
+
+
+@dataclasses.dataclass(frozen=True)
+class StepResult:
+    """A batch of env results; row i is env i. Arrays are read-only views of the reply.
+
+    After an episode ends (``done``), the row already holds the next episode's observation;
+    ``ended_clip_id`` / ``ended_frame`` say which clip and frame the finished episode reached.
+    """
+
+    step: int  # steps taken in this session (0 for the initial result)
+    obs: np.ndarray  # float32 [N, obs_size]
+    amp_obs: Optional[np.ndarray]  # float32 [N, frames * amp_obs_per_frame]; None with amp_obs="omit"
+    reward: np.ndarray  # float32 [N]
+    reward_terms: np.ndarray  # float32 [N, len(spec.reward_terms)]
+    done: np.ndarray  # bool [N]
+    truncated: np.ndarray  # bool [N]: ended by the clip's end or the step limit
+    clip_id: np.ndarray  # int32 [N], index into Session.clip_names
+    frame: np.ndarray  # int32 [N], reference frame of the row's state
+    ended_clip_id: np.ndarray  # int32 [N], valid where done
+    ended_frame: np.ndarray  # int32 [N]
+    max_body_error: np.ndarray  # float32 [N], m, before any reset
+    mean_body_error: np.ndarray  # float32 [N], m
+
+    @classmethod
+    def from_proto(cls, result: pb.StepResult) -> "StepResult":
+        def get(name):
+            return tensors.decode(getattr(result, name), name)
+
+        def flag(name):
+            return get(name).view(np.bool_)  # 0/1 bytes: a zero-copy bool view
+
+        return cls(
+            step=int(result.step),
+            obs=get("obs"),
+            amp_obs=tensors.decode_field(result, "amp_obs"),
+            reward=get("reward"),
+            reward_terms=get("reward_terms"),
+            done=flag("done"),
+            truncated=flag("truncated"),
+            clip_id=get("clip_id"),
+            frame=get("frame"),
+            ended_clip_id=get("ended_clip_id"),
+            ended_frame=get("ended_frame"),
+            max_body_error=get("max_body_error"),
+            mean_body_error=get("mean_body_error"),
+        )
+
+    @property
+    def num_envs(self) -> int:
+        return self.obs.shape[0]
+
+
+@dataclasses.dataclass
+class ClipRollout:
+    """The result of a policy on one clip (``Client.rollout``).
+
+    Errors are in millimetres. With ``frames=True`` the body positions of every step are kept:
+    ``sim_body_pos`` and ``ref_body_pos`` are float32 ``[T, num_bodies, 3]`` in metres (world
+    frame, bodies in ``EnvSpec.body_names`` order) and ``frames`` the reference frame of each row.
+    T counts the start state too, so it is normally ``steps + 1``.
+    """
+
+    clip: str
+    success: bool  # never terminated
+    steps: int
+    g_mpjpe_mm: float  # global body position error
+    mpjpe_mm: float  # root-relative
+    acc_error_mm: float  # mm / frame^2
+    vel_error_mm: float  # mm / frame
+    body_error_mm: np.ndarray  # [num_bodies], body_names order
+    part_error_mm: np.ndarray  # [num_parts] of the checkpoint's layout
+    frames: Optional[np.ndarray] = None  # int32 [T]
+    sim_body_pos: Optional[np.ndarray] = None  # float32 [T, num_bodies, 3]
+    ref_body_pos: Optional[np.ndarray] = None  # float32 [T, num_bodies, 3]
+
+    @classmethod
+    def from_proto(cls, metrics: pb.ClipMetrics) -> "ClipRollout":
+        return cls(
+            clip=metrics.clip,
+            success=metrics.success,
+            steps=metrics.steps,
+            g_mpjpe_mm=metrics.g_mpjpe_mm,
+            mpjpe_mm=metrics.mpjpe_mm,
+            acc_error_mm=metrics.acc_error_mm,
+            vel_error_mm=metrics.vel_error_mm,
+            body_error_mm=np.array(metrics.body_error_mm, dtype=np.float64),
+            part_error_mm=np.array(metrics.part_error_mm, dtype=np.float64),
+        )
+
+    def body_errors(self) -> np.ndarray:
+        """Per-step distance between simulated and reference body, m, ``[T, num_bodies]``
+        (needs ``frames=True``)."""
+        if self.sim_body_pos is None or self.ref_body_pos is None:
+            raise ValueError(f"clip {self.clip!r}: no frames (call rollout with frames=True)")
+        return np.linalg.norm(self.sim_body_pos - self.ref_body_pos, axis=-1)
+
+    def metrics(self) -> Dict[str, object]:
+        """The scalar metrics as a dict (for logging and tables)."""
+        return {k: getattr(self, k) for k in ("clip", "success", "steps", "g_mpjpe_mm", "mpjpe_mm",
+                                              "acc_error_mm", "vel_error_mm")}
+
+
+def message_to_dict(message) -> Dict[str, object]:
+    """A protobuf message as a dict of Python values: every field (defaults included), nested
+    messages as dicts, repeated fields as lists, enums as their names, integers as ints."""
+    out: Dict[str, object] = {}
+    for field in message.DESCRIPTOR.fields:
+        value = getattr(message, field.name)
+        if field.type == field.TYPE_MESSAGE:
+            if field.label == field.LABEL_REPEATED:
+                value = [message_to_dict(v) for v in value]
+            elif message.HasField(field.name):
+                value = message_to_dict(value)
+            else:
+                value = None
+        elif field.type == field.TYPE_ENUM:
+            name = lambda v: field.enum_type.values_by_number[v].name if v in field.enum_type.values_by_number else v
+            value = [name(v) for v in value] if field.label == field.LABEL_REPEATED else name(value)
+        elif field.label == field.LABEL_REPEATED:
+            value = list(value)
+        out[field.name] = value
+    return out
+
+
+def motions_to_dicts(response: pb.ListMotionsResponse) -> List[Dict[str, object]]:
+    return [message_to_dict(m) for m in response.motions]
