@@ -572,7 +572,10 @@ int Main(int argc, char** argv) {
   }
   const double timeout = absl::GetFlag(FLAGS_timeout_s);
   if (!(timeout > 0) || timeout > 86400) return Usage("--timeout_s must be in (0, 86400]");
-  if (absl::GetFlag(FLAGS_server).empty()) return Usage("--server: empty");
+  // gRPC would quietly use port 443 for a bare host name.
+  if (absl::GetFlag(FLAGS_server).find(':') == std::string::npos) {
+    return Usage(absl::StrCat("--server: '", absl::GetFlag(FLAGS_server), "' has no port; give host:port"));
+  }
   if (command == "rollout") {
     if (absl::GetFlag(FLAGS_checkpoint).empty()) return Usage("rollout: --checkpoint is required");
     if (absl::GetFlag(FLAGS_frames) && absl::GetFlag(FLAGS_out).empty()) {

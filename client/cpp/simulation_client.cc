@@ -42,6 +42,8 @@ absl::StatusOr<std::unique_ptr<SimulationClient>> SimulationClient::Connect(cons
   }
   arguments.SetMaxReceiveMessageSize(static_cast<int>(std::min<int64_t>(options.max_message_bytes, INT32_MAX)));
   arguments.SetMaxSendMessageSize(static_cast<int>(std::min<int64_t>(options.max_message_bytes, INT32_MAX)));
+  // Large step results flow without waiting for HTTP/2 window updates.
+  arguments.SetInt(GRPC_ARG_HTTP2_STREAM_LOOKAHEAD_BYTES, 64 << 20);
   std::unique_ptr<SimulationClient> client(new SimulationClient(options));
   client->channel_ = grpc::CreateCustomChannel(options.server, credentials, arguments);
   if (!client->channel_->WaitForConnected(absl::ToChronoTime(absl::Now() + options.connect_timeout))) {

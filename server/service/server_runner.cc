@@ -49,6 +49,12 @@ absl::StatusOr<std::unique_ptr<RunningServer>> StartServer(const ServerOptions& 
   builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_PERMIT_WITHOUT_CALLS, 1);
   builder.AddChannelArgument(GRPC_ARG_HTTP2_MAX_PINGS_WITHOUT_DATA, 0);
   builder.AddChannelArgument(GRPC_ARG_HTTP2_MIN_RECV_PING_INTERVAL_WITHOUT_DATA_MS, 1000);
+  // Step results reach tens of MB; a large stream window lets them flow without waiting for
+  // window updates (measured: +3-5 % steps/s at 1024 envs in bench/grpc_transport_bench).
+  builder.AddChannelArgument(GRPC_ARG_HTTP2_STREAM_LOOKAHEAD_BYTES, 64 << 20);
+  // gRPC enables SO_REUSEPORT by default: a second server on a busy port would silently share
+  // it. Fail instead.
+  builder.AddChannelArgument(GRPC_ARG_ALLOW_REUSEPORT, 0);
   builder.RegisterService(service->get());
   running->service_ = *std::move(service);
   running->server_ = builder.BuildAndStart();
