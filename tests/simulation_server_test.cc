@@ -398,6 +398,45 @@ TEST_F(SimulationServerTest, ReportFailuresValidatesAndStores) {
   EXPECT_EQ(unchanged->reports(), 4);
 }
 
+TEST_F(SimulationServerTest, SampleReferenceAmpMatchesTheResetHistories) {
+  v1::SessionConfig config = Config(2);
+  config.add_motions("deepmimic_walk");
+  auto stream = client_->OpenSession(config);
+  ASSERT_TRUE(stream.ok());
+  v1::SampleReferenceAmpRequest request;
+  request.set_session_id((*stream)->opened().session_id());
+  request.set_num_samples(50);
+  request.set_seed(3);
+  auto samples = client_->SampleReferenceAmp(request);
+  ASSERT_TRUE(samples.ok()) << samples.status();
+  ASSERT_EQ(samples->amp_obs().shape(0), 50);
+  ASSERT_EQ(samples->amp_obs().shape(1), 2320);
+  std::vector<float> values;
+  ASSERT_TRUE(DecodeFloatTensor(samples->amp_obs(), "amp_obs", &values).ok());
+  // Each sample is a reference history: the initial AMP rows of the session are too, and the
+  // root height (feature 0) of every frame lies in the walk clip's range.
+  const MotionClip& walk = DefaultMotions()->clip(DefaultMotions()->Find("deepmimic_walk"));
+  double low = 1e9, high = -1e9;
+  for (int f = 0; f < walk.num_frames; ++f) {
+    low = std::min(low, walk.body_pos[f * 24].z());
+    high = std::max(high, walk.body_pos[f * 24].z());
+  }
+  for (int s = 0; s < 50; ++s) {
+    for (int k = 0; k < 10; ++k) {
+      const float height = values[s * 2320 + k * 232];
+      EXPECT_GE(height, low - 1e-4);
+      EXPECT_LE(height, high + 1e-4);
+    }
+  }
+  request.set_num_samples(0);
+  auto zero = client_->SampleReferenceAmp(request);
+  ASSERT_FALSE(zero.ok());
+  EXPECT_THAT(std::string(zero.status().message()), HasSubstr("num_samples"));
+  request.set_num_samples(10);
+  request.set_session_id("nope");
+  EXPECT_EQ(client_->SampleReferenceAmp(request).status().code(), absl::StatusCode::kNotFound);
+}
+
 TEST_F(SimulationServerTest, RolloutRunsATorchScriptCheckpoint) {
   v1::RolloutRequest request;
   request.set_checkpoint_path(ZeroPolicy());
@@ -419,6 +458,9 @@ TEST_F(SimulationServerTest, RolloutRunsATorchScriptCheckpoint) {
     EXPECT_GE(clip.g_mpjpe_mm(), 0.5 * clip.mpjpe_mm());
     EXPECT_EQ(clip.body_error_mm_size(), 24);
     EXPECT_EQ(clip.part_error_mm_size(), 5);
+    EXPECT_GT(clip.max_mean_body_error_m(), 0.0);
+    // Evaluation termination: a failed clip went past 0.5 m mean error, a successful one never did.
+    EXPECT_EQ(clip.success(), clip.max_mean_body_error_m() <= 0.5);
   }
   EXPECT_EQ(frames, steps);
   // The zero policy holds joints at their range midpoints: it falls, so it fails.

@@ -120,6 +120,18 @@ absl::StatusOr<v1::SamplerState> SimulationClient::ReportFailures(const v1::Repo
   return response;
 }
 
+absl::StatusOr<v1::SampleReferenceAmpResponse> SimulationClient::SampleReferenceAmp(
+    const v1::SampleReferenceAmpRequest& request) {
+  grpc::ClientContext context;
+  Prepare(&context);
+  v1::SampleReferenceAmpResponse response;
+  if (auto status = FromGrpc(stub_->SampleReferenceAmp(&context, request, &response), "SampleReferenceAmp");
+      !status.ok()) {
+    return status;
+  }
+  return response;
+}
+
 absl::StatusOr<std::vector<v1::ClipMetrics>> SimulationClient::Rollout(
     const v1::RolloutRequest& request, const std::function<void(const v1::RolloutFrame&)>& on_frame) {
   grpc::ClientContext context;

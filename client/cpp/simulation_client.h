@@ -79,6 +79,7 @@ class SimulationClient {
   absl::StatusOr<v1::AddMotionsResponse> AddMotionFiles(const std::vector<std::string>& paths);
   absl::StatusOr<v1::AddMotionsResponse> AddMotions(const v1::AddMotionsRequest& request);
   absl::StatusOr<v1::SamplerState> ReportFailures(const v1::ReportFailuresRequest& request);
+  absl::StatusOr<v1::SampleReferenceAmpResponse> SampleReferenceAmp(const v1::SampleReferenceAmpRequest& request);
   // Collects the metrics; frames go to `on_frame` when the request asks for them.
   absl::StatusOr<std::vector<v1::ClipMetrics>> Rollout(const v1::RolloutRequest& request,
                                                        const std::function<void(const v1::RolloutFrame&)>& on_frame = nullptr);

@@ -57,6 +57,8 @@ absl::StatusOr<std::unique_ptr<EnvBatch>> EnvBatch::Create(const EnvBatchConfig&
   batch->context_.spec = std::make_shared<const EnvSpec>(MakeEnvSpec(*batch->context_.humanoid, layout));
   batch->context_.motions = std::move(motions);
   batch->context_.config = config.env;
+  batch->context_.reference_amp =
+      std::make_shared<const ReferenceAmpFrames>(*batch->context_.spec, *batch->context_.motions);
   batch->sampler_ = ClipSampler(batch->context_.motions->size());
   batch->context_.sampler = &batch->sampler_;
   batch->buffers_.Allocate(*batch->context_.spec, config.num_envs);

@@ -52,6 +52,7 @@ class EnvBatch {
   const EnvSpec& spec() const { return *context_.spec; }
   const HumanoidModel& humanoid() const { return *context_.humanoid; }
   const MotionLibrary& motions() const { return *context_.motions; }
+  const ReferenceAmpFrames& reference_amp() const { return *context_.reference_amp; }
   int num_envs() const { return static_cast<int>(envs_.size()); }
   int num_threads() const { return pool_->num_threads(); }
   TrackingEnv& env(int i) { return *envs_[i]; }

@@ -39,11 +39,7 @@ void TrackingEnv::ResetTo(int clip, int frame, EnvRow row) {
   finished_ = false;
   SetSimulationToReference(*context_->humanoid, motion, frame_, data_);
   // AMP history starts as the reference's own recent past.
-  const int per_frame = context_->spec->amp_obs_per_frame;
-  for (int k = 0; k < kAmpHistory; ++k) {
-    ReadReferenceState(motion, std::max(0, frame_ - k), &reference_);
-    WriteAmpFrame(*context_->spec, reference_, &amp_history_[static_cast<size_t>(k) * per_frame]);
-  }
+  context_->reference_amp->WriteHistory(clip, frame_, amp_history_.data());
   amp_head_ = 0;  // the newest frame sits at amp_head_, older ones at amp_head_ + 1, + 2, ...
   WriteObservation(row);
 }

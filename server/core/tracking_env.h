@@ -18,6 +18,7 @@
 #include "server/core/imitation_reward.h"
 #include "server/core/motion_library.h"
 #include "server/core/pd_controller.h"
+#include "server/core/reference_amp.h"
 
 namespace modskill {
 
@@ -44,6 +45,7 @@ struct EnvContext {
   std::shared_ptr<const EnvSpec> spec;
   std::shared_ptr<const MotionLibrary> motions;
   const ClipSampler* sampler = nullptr;
+  std::shared_ptr<const ReferenceAmpFrames> reference_amp;
   TrackingEnvConfig config;
 };
 

@@ -54,6 +54,7 @@ void ToProto(const ClipRolloutMetrics& metrics, v1::ClipMetrics* out) {
   out->set_vel_error_mm(metrics.vel_error_mm);
   for (double e : metrics.body_error_mm) out->add_body_error_mm(e);
   for (double e : metrics.part_error_mm) out->add_part_error_mm(e);
+  out->set_max_mean_body_error_m(metrics.worst_mean_body_error);
 }
 
 void FillStepResult(const EnvBatch& batch, int64_t step, int amp_frames, v1::StepResult* out) {

@@ -259,6 +259,27 @@ grpc::Status SimulationService::ReportFailures(grpc::ServerContext* context, con
   return grpc::Status::OK;
 }
 
+grpc::Status SimulationService::SampleReferenceAmp(grpc::ServerContext* context,
+                                                   const v1::SampleReferenceAmpRequest* request,
+                                                   v1::SampleReferenceAmpResponse* response) {
+  if (auto auth = CheckAuth(context); !auth.ok()) return auth;
+  std::shared_ptr<SimulationSession> session = registry_.Find(request->session_id());
+  if (session == nullptr) {
+    return Error(grpc::StatusCode::NOT_FOUND, absl::StrCat("session_id: no open session '", request->session_id(), "'"));
+  }
+  if (request->num_samples() < 1 || request->num_samples() > 65536) {
+    return Error(grpc::StatusCode::INVALID_ARGUMENT,
+                 absl::StrCat("num_samples: ", request->num_samples(), " outside [1, 65536]"));
+  }
+  const ReferenceAmpFrames& reference = session->batch->reference_amp();
+  const int64_t n = request->num_samples(), width = int64_t{kAmpHistory} * reference.per_frame();
+  std::vector<float> samples(static_cast<size_t>(n * width));
+  std::mt19937_64 rng(request->seed());
+  reference.Sample(static_cast<int>(n), rng, samples.data());
+  SetFloatTensor({n, width}, samples.data(), response->mutable_amp_obs());
+  return grpc::Status::OK;
+}
+
 grpc::Status SimulationService::Rollout(grpc::ServerContext* context, const v1::RolloutRequest* request,
                                         grpc::ServerWriter<v1::RolloutResponse>* writer) {
   if (auto auth = CheckAuth(context); !auth.ok()) return auth;

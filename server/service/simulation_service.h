@@ -34,6 +34,8 @@ class SimulationService final : public v1::Simulation::Service {
                         grpc::ServerReaderWriter<v1::SimulateResponse, v1::SimulateRequest>* stream) override;
   grpc::Status ReportFailures(grpc::ServerContext* context, const v1::ReportFailuresRequest* request,
                               v1::SamplerState* response) override;
+  grpc::Status SampleReferenceAmp(grpc::ServerContext* context, const v1::SampleReferenceAmpRequest* request,
+                                  v1::SampleReferenceAmpResponse* response) override;
   grpc::Status Rollout(grpc::ServerContext* context, const v1::RolloutRequest* request,
                        grpc::ServerWriter<v1::RolloutResponse>* writer) override;
   grpc::Status ListMotions(grpc::ServerContext* context, const v1::ListMotionsRequest* request,
