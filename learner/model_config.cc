@@ -1,0 +1,93 @@
+#include "learner/model_config.h"
+
+#include "absl/strings/str_cat.h"
+
+namespace modskill::learner {
+
+absl::StatusOr<ModelConfig> ModelConfig::Preset(absl::string_view name) {
+  ModelConfig config;
+  config.preset = std::string(name);
+  if (name == "paper") {
+    config.attention_hidden = {256};
+    config.embed_dim = 64;
+    config.controller_hidden = {2048, 1536, 1024, 512};
+    config.critic_hidden = {2048, 1536, 1024, 512};
+    config.discriminator_hidden = {1024, 512};
+  } else if (name == "small") {
+    config.attention_hidden = {64};
+    config.embed_dim = 32;
+    config.controller_hidden = {256, 128};
+    config.critic_hidden = {256, 128};
+    config.discriminator_hidden = {256, 128};
+  } else {
+    return absl::InvalidArgumentError(
+        absl::StrCat("model preset '", name, "' not found (known presets: paper, small)"));
+  }
+  return config;
+}
+
+namespace {
+
+// Checks that the slices [start, start + size) of the parts tile [0, total) in part order.
+absl::Status CheckTiling(const NetworkLayout& layout, absl::string_view what, int64_t total,
+                         int64_t PartSlices::*start, int64_t PartSlices::*size) {
+  int64_t expected = 0;
+  for (size_t p = 0; p < layout.parts.size(); ++p) {
+    const PartSlices& part = layout.parts[p];
+    if (part.*size <= 0) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("network layout: part ", p, " '", part.name, "': ", what, " size is ", part.*size,
+                       ", must be > 0"));
+    }
+    if (part.*start != expected) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "network layout: part ", p, " '", part.name, "': ", what, " slice [", part.*start, ", ",
+          part.*start + part.*size, ") ", part.*start < expected ? "overlaps the previous part" : "leaves a gap",
+          " (expected it to start at ", expected, "; ", what, " slices must tile [0, ", total, ") in part order)"));
+    }
+    expected += part.*size;
+  }
+  if (expected != total) {
+    const PartSlices& last = layout.parts.back();
+    return absl::InvalidArgumentError(absl::StrCat("network layout: part ", layout.parts.size() - 1, " '", last.name,
+                                                   "': ", what, " slices end at ", expected, ", but ", what,
+                                                   "_size is ", total));
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace
+
+absl::Status NetworkLayout::Validate() const {
+  if (obs_size <= 0) return absl::InvalidArgumentError(absl::StrCat("network layout: obs_size is ", obs_size));
+  if (action_size <= 0) {
+    return absl::InvalidArgumentError(absl::StrCat("network layout: action_size is ", action_size));
+  }
+  if (amp_obs_size < 0) {
+    return absl::InvalidArgumentError(absl::StrCat("network layout: amp_obs_size is ", amp_obs_size));
+  }
+  if (parts.empty()) return absl::InvalidArgumentError("network layout: no parts");
+  if (absl::Status s = CheckTiling(*this, "obs", obs_size, &PartSlices::obs_start, &PartSlices::obs_size); !s.ok()) {
+    return s;
+  }
+  return CheckTiling(*this, "action", action_size, &PartSlices::action_start, &PartSlices::action_size);
+}
+
+NetworkLayout LayoutFromEnvSpec(const EnvSpec& spec) {
+  NetworkLayout layout;
+  layout.obs_size = spec.obs_size;
+  layout.action_size = spec.action_size;
+  layout.amp_obs_size = spec.amp_obs_size;
+  for (int p = 0; p < spec.layout.num_parts(); ++p) {
+    PartSlices part;
+    part.name = spec.layout.parts[p].name;
+    part.obs_start = spec.part_obs[p].start;
+    part.obs_size = spec.part_obs[p].size;
+    part.action_start = spec.part_action[p].start;
+    part.action_size = spec.part_action[p].size;
+    layout.parts.push_back(part);
+  }
+  return layout;
+}
+
+}  // namespace modskill::learner

@@ -1,0 +1,55 @@
+// Sizes of the learner's networks (ModSkill, Huang, Dou, Liu 2025) and the slices of the
+// observation and action that belong to each body part.
+#ifndef MODSKILL_LEARNER_MODEL_CONFIG_H_
+#define MODSKILL_LEARNER_MODEL_CONFIG_H_
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "absl/strings/string_view.h"
+#include "server/core/env_spec.h"
+
+namespace modskill::learner {
+
+struct ModelConfig {
+  std::string preset = "small";
+  std::vector<int64_t> attention_hidden;   // per-part key/query/value maps: part obs -> hidden... -> embed_dim
+  int64_t embed_dim = 32;                  // skill embedding z (paper: 64)
+  std::vector<int64_t> controller_hidden;  // per-part low-level controller MLP
+  std::vector<int64_t> critic_hidden;
+  std::vector<int64_t> discriminator_hidden;
+  double log_std = -2.9;    // fixed Gaussian sigma = exp(-2.9) (PHC)
+  bool whole_body = false;  // ablation: one controller for the whole body (input: all z concatenated + full obs)
+  bool attention = true;    // ablation: false -> each part's z comes from its own value map only (attention = identity)
+
+  // "paper": attention {256} -> 64, controllers {2048,1536,1024,512}, critic {2048,1536,1024,512},
+  //          discriminator {1024,512}.
+  // "small" (fits a 2-core CPU): attention {64} -> 32, controllers {256,128}, critic {256,128},
+  //          discriminator {256,128}.
+  // INVALID_ARGUMENT naming the preset otherwise.
+  static absl::StatusOr<ModelConfig> Preset(absl::string_view name);
+};
+
+struct PartSlices {
+  std::string name;
+  int64_t obs_start = 0, obs_size = 0, action_start = 0, action_size = 0;
+};
+
+struct NetworkLayout {
+  int64_t obs_size = 0, action_size = 0, amp_obs_size = 0;
+  std::vector<PartSlices> parts;  // contiguous, in order; obs and action slices each tile [0, size)
+  // INVALID_ARGUMENT unless obs_size, action_size and every part's slices are > 0 (amp_obs_size
+  // >= 0: 0 means no discriminator) and the parts' obs and action slices each tile [0, size) in
+  // part order. The message names the part.
+  absl::Status Validate() const;
+};
+
+// The layout of the env's observation and action (EnvSpec::part_obs / part_action).
+NetworkLayout LayoutFromEnvSpec(const EnvSpec& spec);
+
+}  // namespace modskill::learner
+
+#endif  // MODSKILL_LEARNER_MODEL_CONFIG_H_

@@ -1,0 +1,59 @@
+#include "learner/modskill_policy.h"
+
+#include <cmath>
+#include <string>
+
+namespace modskill::learner {
+
+ModSkillPolicyImpl::ModSkillPolicyImpl(const NetworkLayout& layout, const ModelConfig& config)
+    : layout_(layout), config_(config), attention_(register_module("attention", SkillAttention(layout, config))) {
+  // SkillAttention validated the layout: the parts' action slices tile [0, action_size) in part
+  // order, so concatenating the parts' means gives the actions in action order.
+  const int64_t num_parts = static_cast<int64_t>(layout.parts.size());
+  const int64_t embed = config.embed_dim;
+  if (config.whole_body) {
+    controllers_.push_back(register_module(
+        "whole_body_controller",
+        PartController(num_parts * embed + layout.obs_size, layout.action_size, config.controller_hidden)));
+  } else {
+    int64_t next_action = 0;
+    for (int64_t p = 0; p < num_parts; ++p) {
+      const PartSlices& part = layout.parts[p];
+      TORCH_CHECK(part.action_start == next_action, "ModSkillPolicy: part '", part.name,
+                  "' actions are not contiguous in part order");
+      next_action += part.action_size;
+      controllers_.push_back(register_module("controller" + std::to_string(p),
+                                             PartController(embed + part.obs_size, part.action_size,
+                                                            config.controller_hidden)));
+    }
+    TORCH_CHECK(next_action == layout.action_size, "ModSkillPolicy: part actions do not cover action_size");
+  }
+  log_std_ = register_buffer("log_std", torch::full({layout.action_size}, config.log_std));
+}
+
+SkillAttentionOutput ModSkillPolicyImpl::skills(const torch::Tensor& normalized_obs) {
+  return attention_->forward(normalized_obs);
+}
+
+torch::Tensor ModSkillPolicyImpl::forward(const torch::Tensor& normalized_obs) {
+  const torch::Tensor z = skills(normalized_obs).z;  // [B, P, E]
+  if (config_.whole_body) {
+    return controllers_[0]->forward(torch::cat({z.flatten(1), normalized_obs}, 1));  // [B, A]
+  }
+  std::vector<torch::Tensor> means;
+  for (size_t p = 0; p < controllers_.size(); ++p) {
+    const PartSlices& part = layout_.parts[p];
+    const torch::Tensor part_obs = normalized_obs.slice(1, part.obs_start, part.obs_start + part.obs_size);
+    means.push_back(controllers_[p]->forward(torch::cat({z.select(1, p), part_obs}, 1)));  // [B, A_p]
+  }
+  return torch::cat(means, 1);  // [B, A]
+}
+
+torch::Tensor ModSkillPolicyImpl::LogProb(const torch::Tensor& mean, const torch::Tensor& log_std,
+                                          const torch::Tensor& actions) {
+  static const double kHalfLog2Pi = 0.5 * std::log(2.0 * M_PI);
+  const torch::Tensor scaled = (actions - mean) * torch::exp(-log_std);
+  return (-0.5 * scaled.square() - log_std - kHalfLog2Pi).sum(-1);
+}
+
+}  // namespace modskill::learner

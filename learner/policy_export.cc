@@ -1,0 +1,168 @@
+#include "learner/policy_export.h"
+
+#include <cmath>
+#include <cstdlib>
+#include <sstream>
+#include <vector>
+
+#include <torch/script.h>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "absl/strings/str_join.h"
+#include "server/core/atomic_file.h"
+
+namespace modskill::learner {
+namespace {
+
+// The shortest decimal that reads back as `value`, always a float literal for TorchScript.
+std::string ScriptFloat(double value) {
+  std::string text;
+  for (int precision = 1; precision <= 17; ++precision) {
+    text = absl::StrFormat("%.*g", precision, value);
+    if (std::strtod(text.c_str(), nullptr) == value) break;
+  }
+  if (text.find_first_of(".en") == std::string::npos) text += ".0";
+  return text;
+}
+
+std::string PartPrefix(size_t part, absl::string_view role) { return absl::StrCat("part", part, "_", role); }
+
+std::string LayerName(absl::string_view prefix, size_t layer, absl::string_view tensor) {
+  return absl::StrCat(prefix, "_fc", layer, "_", tensor);
+}
+
+// Emits `output = mlp(input)` line by line, the same ops as MlpImpl::forward
+// (Linear on a 2-d input is addmm(bias, x, weight^T)).
+void EmitMlp(const MlpImpl& mlp, absl::string_view prefix, absl::string_view input, absl::string_view output,
+             std::string* source) {
+  const size_t num_layers = mlp.layers().size();
+  std::string x(input);
+  for (size_t i = 0; i < num_layers; ++i) {
+    const bool last = i + 1 == num_layers;
+    const std::string target = last ? std::string(output) : "h";
+    absl::StrAppend(source, "    ", target, " = torch.addmm(self.", LayerName(prefix, i, "bias"), ", ", x, ", self.",
+                    LayerName(prefix, i, "weight"), ".t())\n");
+    if (!last) {
+      absl::StrAppend(source, "    h = torch.", mlp.activation() == Activation::kElu ? "elu" : "relu", "(h)\n");
+    }
+    x = "h";
+  }
+}
+
+void RegisterMlp(const MlpImpl& mlp, absl::string_view prefix, torch::jit::Module* module) {
+  for (size_t i = 0; i < mlp.layers().size(); ++i) {
+    const torch::nn::Linear& layer = mlp.layers()[i];
+    module->register_parameter(LayerName(prefix, i, "weight"), layer->weight.detach().clone(), /*is_buffer=*/false);
+    module->register_parameter(LayerName(prefix, i, "bias"), layer->bias.detach().clone(), /*is_buffer=*/false);
+  }
+}
+
+std::string Slice(const PartSlices& part) {
+  return absl::StrCat("x[:, ", part.obs_start, ":", part.obs_start + part.obs_size, "]");
+}
+
+}  // namespace
+
+std::string PolicyScriptSource(const ModSkillPolicyImpl& policy) {
+  const NetworkLayout& layout = policy.layout();
+  const SkillAttentionImpl& attention = *policy.attention();
+  const size_t num_parts = layout.parts.size();
+  std::string src = "def forward(self, obs):\n";
+  absl::StrAppend(&src, "    # RunningMeanStd::Normalize\n",
+                  "    x = torch.clamp((obs - self.obs_mean.to(obs.dtype)) / torch.sqrt(self.obs_var + ",
+                  ScriptFloat(RunningMeanStdImpl::kEpsilon), ").to(obs.dtype), ",
+                  ScriptFloat(-RunningMeanStdImpl::kClip), ", ",
+                  ScriptFloat(RunningMeanStdImpl::kClip), ")\n");
+  // Skill attention: per part key, query, value maps.
+  std::vector<std::string> keys, queries, values;
+  for (size_t p = 0; p < num_parts; ++p) {
+    const PartSlices& part = layout.parts[p];
+    absl::StrAppend(&src, "    # part ", p, " '", part.name, "': obs [", part.obs_start, ", ",
+                    part.obs_start + part.obs_size, "), actions [", part.action_start, ", ",
+                    part.action_start + part.action_size, ")\n");
+    absl::StrAppend(&src, "    s", p, " = ", Slice(part), "\n");
+    const std::string s = absl::StrCat("s", p);
+    values.push_back(absl::StrCat("v", p));
+    EmitMlp(*attention.values()[p], PartPrefix(p, "value"), s, values.back(), &src);
+    if (attention.uses_attention()) {
+      keys.push_back(absl::StrCat("k", p));
+      queries.push_back(absl::StrCat("q", p));
+      EmitMlp(*attention.keys()[p], PartPrefix(p, "key"), s, keys.back(), &src);
+      EmitMlp(*attention.queries()[p], PartPrefix(p, "query"), s, queries.back(), &src);
+    }
+  }
+  absl::StrAppend(&src, "    v = torch.stack([", absl::StrJoin(values, ", "), "], 1)\n");
+  if (attention.uses_attention()) {
+    absl::StrAppend(&src, "    q = torch.stack([", absl::StrJoin(queries, ", "), "], 1)\n");
+    absl::StrAppend(&src, "    k = torch.stack([", absl::StrJoin(keys, ", "), "], 1)\n");
+    absl::StrAppend(&src, "    alpha = torch.softmax(torch.matmul(q, k.transpose(1, 2)) / ",
+                    ScriptFloat(std::sqrt(static_cast<double>(attention.embed_dim()))), ", -1)\n");
+    absl::StrAppend(&src, "    z = torch.matmul(alpha, v)\n");
+  } else {
+    absl::StrAppend(&src, "    z = v\n");
+  }
+  absl::StrAppend(&src, "    z = z / torch.clamp_min(torch.sqrt(torch.sum(z * z, [-1], True)), ",
+                  ScriptFloat(SkillAttentionImpl::kMinNorm), ")\n");
+  // Controllers.
+  if (policy.config().whole_body) {
+    absl::StrAppend(&src, "    c = torch.cat([torch.flatten(z, 1), x], 1)\n");
+    EmitMlp(*policy.controllers()[0]->mlp(), "whole_body_controller", "c", "a", &src);
+    absl::StrAppend(&src, "    return a\n");
+  } else {
+    std::vector<std::string> actions;
+    for (size_t p = 0; p < num_parts; ++p) {
+      absl::StrAppend(&src, "    c", p, " = torch.cat([z[:, ", p, "], ", Slice(layout.parts[p]), "], 1)\n");
+      actions.push_back(absl::StrCat("a", p));
+      EmitMlp(*policy.controllers()[p]->mlp(), PartPrefix(p, "controller"), absl::StrCat("c", p), actions.back(),
+              &src);
+    }
+    absl::StrAppend(&src, "    return torch.cat([", absl::StrJoin(actions, ", "), "], 1)\n");
+  }
+  return src;
+}
+
+absl::Status ExportPolicy(ModSkillPolicy& policy, RunningMeanStd& obs_norm, const modskill::PolicySpec& spec,
+                          const std::string& path) {
+  const NetworkLayout& layout = policy->layout();
+  if (spec.obs_size != layout.obs_size || spec.action_size != layout.action_size) {
+    return absl::InvalidArgumentError(absl::StrCat("ExportPolicy: spec has obs_size ", spec.obs_size, ", action_size ",
+                                                   spec.action_size, "; the policy has ", layout.obs_size, ", ",
+                                                   layout.action_size));
+  }
+  if (obs_norm->size() != layout.obs_size) {
+    return absl::InvalidArgumentError(absl::StrCat("ExportPolicy: obs_norm has size ", obs_norm->size(),
+                                                   ", the policy's obs_size is ", layout.obs_size));
+  }
+  try {
+    torch::NoGradGuard no_grad;
+    torch::jit::Module module("ModSkillPolicy");
+    module.register_buffer("obs_mean", obs_norm->mean().detach().clone());
+    module.register_buffer("obs_var", obs_norm->var().detach().clone());
+    module.register_buffer("log_std", policy->log_std().detach().clone());
+    const SkillAttentionImpl& attention = *policy->attention();
+    for (size_t p = 0; p < layout.parts.size(); ++p) {
+      RegisterMlp(*attention.values()[p], PartPrefix(p, "value"), &module);
+      if (attention.uses_attention()) {
+        RegisterMlp(*attention.keys()[p], PartPrefix(p, "key"), &module);
+        RegisterMlp(*attention.queries()[p], PartPrefix(p, "query"), &module);
+      }
+    }
+    if (policy->config().whole_body) {
+      RegisterMlp(*policy->controllers()[0]->mlp(), "whole_body_controller", &module);
+    } else {
+      for (size_t p = 0; p < layout.parts.size(); ++p) {
+        RegisterMlp(*policy->controllers()[p]->mlp(), PartPrefix(p, "controller"), &module);
+      }
+    }
+    module.define(PolicyScriptSource(*policy));
+    std::ostringstream out(std::ios::binary);
+    module.save(out, {{kCheckpointSpecFile, spec.ToJson()}});
+    return WriteFileAtomically(path, out.str());
+  } catch (const std::exception& e) {
+    std::string message = e.what();
+    return absl::InternalError(absl::StrCat("ExportPolicy: ", message.substr(0, message.find('\n'))));
+  }
+}
+
+}  // namespace modskill::learner

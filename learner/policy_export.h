@@ -1,0 +1,31 @@
+// Exports a trained ModSkill policy as the TorchScript checkpoint the server runs
+// (server/service/policy_checkpoint.h): forward(obs) maps RAW observations [N, obs_size] to the
+// deterministic action means [N, action_size], normalization included.
+#ifndef MODSKILL_LEARNER_POLICY_EXPORT_H_
+#define MODSKILL_LEARNER_POLICY_EXPORT_H_
+
+#include <string>
+
+#include "absl/status/status.h"
+#include "learner/modskill_policy.h"
+#include "learner/running_mean_std.h"
+#include "server/service/policy_checkpoint.h"
+
+namespace modskill::learner {
+
+// The C++ frontend's modules cannot be scripted, so the exporter copies every tensor the
+// forward pass uses into a torch::jit::Module under a flat name (obs_mean, obs_var, log_std,
+// part<p>_{key,query,value,controller}_fc<i>_{weight,bias} or whole_body_controller_fc<i>_...)
+// and defines a forward generated here, unrolled per part and per layer, with the same
+// operations as RunningMeanStd::Normalize and ModSkillPolicy::forward. The archive carries
+// spec.ToJson() as the extra file kCheckpointSpecFile and is written atomically.
+// INVALID_ARGUMENT when spec's or obs_norm's sizes differ from the policy's layout.
+absl::Status ExportPolicy(ModSkillPolicy& policy, RunningMeanStd& obs_norm, const modskill::PolicySpec& spec,
+                          const std::string& path);
+
+// The generated TorchScript source of ExportPolicy (for reading and tests).
+std::string PolicyScriptSource(const ModSkillPolicyImpl& policy);
+
+}  // namespace modskill::learner
+
+#endif  // MODSKILL_LEARNER_POLICY_EXPORT_H_

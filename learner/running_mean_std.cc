@@ -1,0 +1,38 @@
+#include "learner/running_mean_std.h"
+
+namespace modskill::learner {
+
+RunningMeanStdImpl::RunningMeanStdImpl(int64_t size) : size_(size) {
+  const auto options = torch::TensorOptions().dtype(torch::kFloat64);
+  mean_ = register_buffer("mean", torch::zeros({size}, options));
+  var_ = register_buffer("var", torch::ones({size}, options));
+  count_ = register_buffer("count", torch::zeros({}, options));
+}
+
+void RunningMeanStdImpl::Update(const torch::Tensor& batch) {
+  TORCH_CHECK(batch.dim() == 2 && batch.size(1) == size_, "RunningMeanStd::Update: expected [B, ", size_,
+              "], got ", batch.sizes());
+  if (batch.size(0) == 0) return;
+  torch::NoGradGuard no_grad;
+  const torch::Tensor x = batch.detach().to(torch::kFloat64);
+  const double n_b = static_cast<double>(x.size(0));
+  const torch::Tensor mean_b = x.mean(0);
+  const torch::Tensor var_b = x.var(0, /*unbiased=*/false);
+  const double n_a = count_.item<double>();
+  const double n = n_a + n_b;
+  // Chan et al.: delta = mean_b - mean_a; mean = mean_a + delta n_b / n;
+  // M2 = M2_a + M2_b + delta^2 n_a n_b / n; var = M2 / n.
+  const torch::Tensor delta = mean_b - mean_;
+  const torch::Tensor m2 = var_ * n_a + var_b * n_b + delta.square() * (n_a * n_b / n);
+  mean_.add_(delta * (n_b / n));
+  var_.copy_(m2 / n);
+  count_.fill_(n);
+}
+
+torch::Tensor RunningMeanStdImpl::Normalize(const torch::Tensor& x) const {
+  const torch::Tensor mean = mean_.to(x.scalar_type());
+  const torch::Tensor std = torch::sqrt(var_ + kEpsilon).to(x.scalar_type());
+  return torch::clamp((x - mean) / std, -kClip, kClip);
+}
+
+}  // namespace modskill::learner

@@ -1,0 +1,88 @@
+// Training logs: TensorBoard event files and CSV, with no TensorFlow or protobuf dependency.
+//
+// An event file is a sequence of TFRecords:
+//   uint64 length (little-endian) | uint32 masked_crc32c(length bytes) |
+//   payload (length bytes)        | uint32 masked_crc32c(payload)
+// where each payload is a hand-encoded `tensorflow.Event` protobuf message:
+//   Event   { double wall_time = 1; int64 step = 2; string file_version = 3;
+//             Summary summary = 5; }
+//   Summary { repeated Value value = 1; }
+//   Value   { string tag = 1; float simple_value = 2; }
+// The first record carries file_version "brain.Event:2"; each scalar is one further record.
+#ifndef MODSKILL_LEARNER_TENSORBOARD_WRITER_H_
+#define MODSKILL_LEARNER_TENSORBOARD_WRITER_H_
+
+#include <cstdint>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "absl/strings/string_view.h"
+
+namespace modskill::learner {
+
+// CRC-32C (Castagnoli, reflected polynomial 0x82F63B78), table-driven.
+// Crc32c("123456789") == 0xE3069283.
+uint32_t Crc32c(absl::string_view data);
+// TFRecord's mask: ((crc >> 15) | (crc << 17)) + 0xa282ead8.
+uint32_t MaskCrc32c(uint32_t crc);
+
+// Appends scalars to `run_dir/events.out.tfevents.<unix seconds>.<hostname>`.
+// Records are buffered until Flush(); the destructor flushes and closes the file.
+// Not thread-safe: one writer per thread, or the caller serializes.
+class TensorBoardWriter {
+ public:
+  // Creates `run_dir` if needed and writes the file_version record. Errors name the file.
+  static absl::StatusOr<std::unique_ptr<TensorBoardWriter>> Open(const std::string& run_dir);
+  ~TensorBoardWriter();
+  TensorBoardWriter(const TensorBoardWriter&) = delete;
+  TensorBoardWriter& operator=(const TensorBoardWriter&) = delete;
+
+  // One Event{wall_time = now, step, summary{value{tag, simple_value = float(value)}}}.
+  absl::Status AddScalar(const std::string& tag, int64_t step, double value);
+  // Hands buffered records to the OS (fflush).
+  absl::Status Flush();
+
+  const std::string& path() const { return path_; }
+
+ private:
+  TensorBoardWriter(std::string path, std::FILE* file) : path_(std::move(path)), file_(file) {}
+  absl::Status WriteRecord(absl::string_view payload);
+
+  std::string path_;
+  std::FILE* file_;
+};
+
+// A CSV table with a fixed header, one row per Append, flushed after each row.
+class CsvLogger {
+ public:
+  // A new (or empty) file gets the header `columns` joined by ','. An existing file whose
+  // first line is that same header is appended to (a resumed run); any other header is a
+  // FAILED_PRECONDITION naming the file and both headers. Column names may not contain
+  // ',', '"' or newlines.
+  static absl::StatusOr<std::unique_ptr<CsvLogger>> Open(const std::string& path,
+                                                         const std::vector<std::string>& columns);
+  ~CsvLogger();
+  CsvLogger(const CsvLogger&) = delete;
+  CsvLogger& operator=(const CsvLogger&) = delete;
+
+  // `row` must have one value per column; values are written in shortest round-trip form.
+  absl::Status Append(const std::vector<double>& row);
+
+  const std::string& path() const { return path_; }
+
+ private:
+  CsvLogger(std::string path, std::FILE* file, size_t num_columns)
+      : path_(std::move(path)), file_(file), num_columns_(num_columns) {}
+
+  std::string path_;
+  std::FILE* file_;
+  size_t num_columns_;
+};
+
+}  // namespace modskill::learner
+
+#endif  // MODSKILL_LEARNER_TENSORBOARD_WRITER_H_

@@ -1,0 +1,208 @@
+// modskill-learner: trains a ModSkill policy against one or many simulation servers, or
+// evaluates a trained one (--eval).
+//
+//   modskill-learner --servers host:port[,host:port...] --run_dir DIR --preset small|paper --iterations N
+//   modskill-learner --eval --checkpoint DIR/policy.pt --servers host:port [--clips a,b] [--eval_out DIR]
+#include <signal.h>
+
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "absl/flags/flag.h"
+#include "absl/flags/parse.h"
+#include "absl/flags/usage.h"
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "absl/time/clock.h"
+#include "learner/evaluation.h"
+#include "learner/tensorboard_writer.h"
+#include "learner/trainer.h"
+#include "server/core/atomic_file.h"
+#include "server/service/policy_checkpoint.h"
+#include "server/service/server_log.h"
+
+ABSL_FLAG(std::vector<std::string>, servers, {}, "simulation servers, host:port, comma-separated");
+ABSL_FLAG(std::string, run_dir, "", "where checkpoints, the exported policy and logs go");
+ABSL_FLAG(std::string, preset, "small", "network and optimizer sizes: small (2-core CPU) or paper");
+ABSL_FLAG(int, iterations, 100, "PPO iterations to run (after those of a resumed run)");
+ABSL_FLAG(double, time_budget_min, 0, "stop after this many minutes of training (0: no limit)");
+ABSL_FLAG(int, envs_per_server, 0, "envs on each server (0: the preset's, 256 for small)");
+ABSL_FLAG(int, sessions_per_server, 2, "sessions per server; 2 overlaps simulation with inference");
+ABSL_FLAG(std::string, part_layout, "5part", "body-part layout: 5part, 3part, 2part or 1part");
+ABSL_FLAG(std::vector<std::string>, motions, {}, "clips to train on (default: the server's library)");
+ABSL_FLAG(bool, whole_body, false, "ablation: one controller for the whole body");
+ABSL_FLAG(bool, no_attention, false, "ablation: no attention across parts");
+ABSL_FLAG(int, horizon, 32, "steps per env per iteration");
+ABSL_FLAG(int, epochs, 0, "PPO epochs per iteration (0: the preset's)");
+ABSL_FLAG(int, minibatch_size, 0, "PPO minibatch (0: the preset's)");
+ABSL_FLAG(double, learning_rate, 0, "Adam learning rate (0: the preset's)");
+ABSL_FLAG(double, log_std, 0, "fixed log standard deviation of the Gaussian policy (0: the preset's)");
+ABSL_FLAG(double, amp_reward_weight, 0.5, "weight of the AMP style reward (task: 1 - this)");
+ABSL_FLAG(uint64_t, seed, 1, "random seed");
+ABSL_FLAG(int, checkpoint_every, 10, "iterations between checkpoints");
+ABSL_FLAG(bool, resume, false, "continue the run in --run_dir from its checkpoint");
+ABSL_FLAG(double, server_timeout_s, 120, "exit when no server answers for this long");
+ABSL_FLAG(int, threads, 1, "torch threads for inference and updates (the servers need the other cores)");
+ABSL_FLAG(std::string, auth_token_file, "", "bearer token for the servers");
+ABSL_FLAG(std::string, tls_ca, "", "PEM roots: connect with TLS");
+ABSL_FLAG(bool, eval, false, "evaluate --checkpoint instead of training");
+ABSL_FLAG(std::string, checkpoint, "", "--eval: the exported TorchScript policy (run_dir/policy.pt)");
+ABSL_FLAG(std::vector<std::string>, clips, {}, "--eval: clips to evaluate (default: all)");
+ABSL_FLAG(std::string, eval_out, "", "--eval: directory for eval.json and eval.md (default: the checkpoint's)");
+
+namespace modskill::learner {
+namespace {
+
+std::atomic<bool> g_stop{false};
+void OnSignal(int) { g_stop = true; }
+
+int Fail(const std::string& message, int code = 1) {
+  std::fprintf(stderr, "error: %s\n", message.c_str());
+  return code;
+}
+
+int RunEvaluation(const std::string& token) {
+  const std::string checkpoint = absl::GetFlag(FLAGS_checkpoint);
+  if (checkpoint.empty()) return Fail("--eval needs --checkpoint (a run's policy.pt)", 2);
+  if (absl::GetFlag(FLAGS_servers).empty()) return Fail("--eval needs --servers", 2);
+  auto bytes = ReadFileToString(checkpoint, size_t{2} << 30);
+  if (!bytes.ok()) return Fail(absl::StrCat("--checkpoint: ", bytes.status().message()));
+  ClientOptions options;
+  options.server = absl::GetFlag(FLAGS_servers)[0];
+  options.token = token;
+  options.tls_ca_file = absl::GetFlag(FLAGS_tls_ca);
+  auto client = SimulationClient::Connect(options);
+  if (!client.ok()) return Fail(std::string(client.status().message()));
+  LogLine("evaluating %s on %s", checkpoint, options.server);
+  auto report = Evaluate(**client, checkpoint, *bytes, absl::GetFlag(FLAGS_clips));
+  if (!report.ok()) return Fail(std::string(report.status().message()));
+  const std::string markdown = report->ToMarkdown("ModSkill (modskill, " + absl::GetFlag(FLAGS_preset) + ")");
+  std::printf("%s", markdown.c_str());
+  std::string out_dir = absl::GetFlag(FLAGS_eval_out);
+  if (out_dir.empty()) out_dir = std::filesystem::path(checkpoint).parent_path().string();
+  if (out_dir.empty()) out_dir = ".";
+  std::error_code error;
+  std::filesystem::create_directories(out_dir, error);
+  for (const auto& [name, text] : {std::pair<std::string, std::string>{"eval.json", report->ToJson()}, {"eval.md", markdown}}) {
+    if (absl::Status status = WriteFileAtomically(out_dir + "/" + name, text); !status.ok()) {
+      return Fail(std::string(status.message()));
+    }
+  }
+  LogLine("wrote %s/eval.json and %s/eval.md", out_dir, out_dir);
+  return 0;
+}
+
+int RunTraining(const std::string& token) {
+  auto config = TrainerConfig::ForPreset(absl::GetFlag(FLAGS_preset));
+  if (!config.ok()) return Fail(absl::StrCat("--preset: ", config.status().message()), 2);
+  config->servers = absl::GetFlag(FLAGS_servers);
+  config->token = token;
+  config->tls_ca_file = absl::GetFlag(FLAGS_tls_ca);
+  config->run_dir = absl::GetFlag(FLAGS_run_dir);
+  config->iterations = absl::GetFlag(FLAGS_iterations);
+  if (absl::GetFlag(FLAGS_envs_per_server) > 0) config->envs_per_server = absl::GetFlag(FLAGS_envs_per_server);
+  config->sessions_per_server = absl::GetFlag(FLAGS_sessions_per_server);
+  config->part_layout = absl::GetFlag(FLAGS_part_layout);
+  config->motions = absl::GetFlag(FLAGS_motions);
+  config->model.whole_body = absl::GetFlag(FLAGS_whole_body);
+  config->model.attention = !absl::GetFlag(FLAGS_no_attention);
+  config->horizon = absl::GetFlag(FLAGS_horizon);
+  if (absl::GetFlag(FLAGS_epochs) > 0) config->epochs = absl::GetFlag(FLAGS_epochs);
+  if (absl::GetFlag(FLAGS_minibatch_size) > 0) config->minibatch_size = absl::GetFlag(FLAGS_minibatch_size);
+  if (absl::GetFlag(FLAGS_learning_rate) > 0) config->learning_rate = absl::GetFlag(FLAGS_learning_rate);
+  if (absl::GetFlag(FLAGS_log_std) != 0) config->model.log_std = absl::GetFlag(FLAGS_log_std);
+  const double amp_weight = absl::GetFlag(FLAGS_amp_reward_weight);
+  if (!(amp_weight >= 0 && amp_weight <= 1)) return Fail("--amp_reward_weight must be in [0, 1]", 2);
+  config->amp_reward_weight = amp_weight;
+  config->task_reward_weight = 1 - amp_weight;
+  config->seed = absl::GetFlag(FLAGS_seed);
+  config->checkpoint_every = absl::GetFlag(FLAGS_checkpoint_every);
+  config->resume = absl::GetFlag(FLAGS_resume);
+  config->server_timeout_s = absl::GetFlag(FLAGS_server_timeout_s);
+  if (absl::Status status = config->Validate(); !status.ok()) return Fail(std::string(status.message()), 2);
+
+  auto trainer = Trainer::Create(*config);
+  if (!trainer.ok()) return Fail(std::string(trainer.status().message()));
+  auto events = TensorBoardWriter::Open(config->run_dir);
+  if (!events.ok()) return Fail(std::string(events.status().message()));
+  const std::vector<std::string> columns = {
+      "iteration", "env_steps", "env_steps_per_second", "mean_task_reward", "mean_amp_reward", "episode_return",
+      "episode_length", "reward_pos", "reward_rot", "reward_vel", "reward_ang_vel", "reward_energy", "policy_loss",
+      "value_loss", "approx_kl", "clip_fraction", "discriminator_loss", "expert_logit", "policy_logit",
+      "gradient_penalty", "live_sessions", "wall_seconds"};
+  auto csv = CsvLogger::Open(config->run_dir + "/progress.csv", columns);
+  if (!csv.ok()) return Fail(std::string(csv.status().message()));
+
+  const absl::Time start = absl::Now();
+  const double budget_min = absl::GetFlag(FLAGS_time_budget_min);
+  const int first = (*trainer)->iteration(), last = first + config->iterations;
+  LogLine("training %s preset on %d server(s), %d envs each, layout %s%s%s, run dir %s",
+          config->model.preset, static_cast<int>(config->servers.size()), config->envs_per_server,
+          config->part_layout, config->model.whole_body ? ", whole-body controller" : "",
+          config->model.attention ? "" : ", no attention", config->run_dir);
+  absl::Status status = (*trainer)->Run(
+      [&](const IterationStats& s) {
+        const double elapsed = absl::ToDoubleSeconds(absl::Now() - start);
+        const double per_iteration = elapsed / std::max(1, s.iteration - first);
+        double left = per_iteration * (last - s.iteration);
+        if (budget_min > 0) left = std::min(left, std::max(0.0, budget_min * 60 - elapsed));
+        std::printf(
+            "it %4d/%d | %9lld steps %5.0f/s | reward %.3f amp %.3f | return %6.2f len %5.1f | "
+            "pos %.3f rot %.3f vel %.3f ang %.3f energy %.3f | pi %+.4f v %.4f kl %.4f clip %.3f | "
+            "D %.3f (expert %+.2f policy %+.2f) | sessions %d | collect %.1fs update %.1fs | left %s\n",
+            s.iteration, last, static_cast<long long>(s.env_steps), s.env_steps_per_second, s.mean_task_reward,
+            s.mean_amp_reward, s.mean_episode_return, s.mean_episode_length, s.reward_terms[0], s.reward_terms[1],
+            s.reward_terms[2], s.reward_terms[3], s.reward_terms[4], s.policy_loss, s.value_loss, s.approx_kl,
+            s.clip_fraction, s.discriminator_loss, s.expert_logit, s.policy_logit, s.live_sessions, s.collect_seconds,
+            s.update_seconds,
+            absl::FormatDuration(absl::Seconds(std::round(left))).c_str());
+        std::fflush(stdout);
+        const std::vector<double> row = {
+            double(s.iteration), double(s.env_steps), s.env_steps_per_second, s.mean_task_reward, s.mean_amp_reward,
+            s.mean_episode_return, s.mean_episode_length, s.reward_terms[0], s.reward_terms[1], s.reward_terms[2],
+            s.reward_terms[3], s.reward_terms[4], s.policy_loss, s.value_loss, s.approx_kl, s.clip_fraction,
+            s.discriminator_loss, s.expert_logit, s.policy_logit, s.gradient_penalty, double(s.live_sessions), elapsed};
+        for (size_t c = 2; c < columns.size(); ++c) (void)(*events)->AddScalar(columns[c], s.env_steps, row[c]);
+        (void)(*events)->Flush();
+        (void)(*csv)->Append(row);
+        if (budget_min > 0 && elapsed >= budget_min * 60) g_stop = true;
+      },
+      &g_stop);
+  if (!status.ok()) return Fail(std::string(status.message()));
+  // Whatever stopped the run, its last state is on disk.
+  if (absl::Status saved = (*trainer)->SaveCheckpoint(config->run_dir + "/checkpoint.pt"); !saved.ok()) {
+    return Fail(std::string(saved.message()));
+  }
+  if (absl::Status exported = (*trainer)->ExportPolicy(config->run_dir + "/policy.pt"); !exported.ok()) {
+    return Fail(std::string(exported.message()));
+  }
+  LogLine("done: %d iterations, %lld env steps; checkpoint %s/checkpoint.pt, policy %s/policy.pt",
+          (*trainer)->iteration(), static_cast<long long>((*trainer)->env_steps()), config->run_dir, config->run_dir);
+  return 0;
+}
+
+}  // namespace
+}  // namespace modskill::learner
+
+int main(int argc, char** argv) {
+  absl::SetProgramUsageMessage(
+      "trains or evaluates a ModSkill policy against modskill simulation servers.\n"
+      "  modskill-learner --servers host:port --run_dir DIR --preset small --iterations N\n"
+      "  modskill-learner --eval --checkpoint DIR/policy.pt --servers host:port");
+  absl::ParseCommandLine(argc, argv);
+  using namespace modskill::learner;
+  signal(SIGINT, OnSignal);
+  signal(SIGTERM, OnSignal);
+  modskill::SetTorchThreads(std::max(1, absl::GetFlag(FLAGS_threads)));
+  std::string token;
+  if (!absl::GetFlag(FLAGS_auth_token_file).empty()) {
+    auto read = modskill::ReadTokenFile(absl::GetFlag(FLAGS_auth_token_file));
+    if (!read.ok()) return Fail(absl::StrCat("--auth_token_file: ", read.status().message()), 2);
+    token = *read;
+  }
+  return absl::GetFlag(FLAGS_eval) ? RunEvaluation(token) : RunTraining(token);
+}

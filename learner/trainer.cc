@@ -1,0 +1,551 @@
+#include "learner/trainer.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <sstream>
+#include <thread>
+#include <unordered_map>
+
+#include "absl/strings/str_cat.h"
+#include "absl/time/clock.h"
+#include "learner/amp_loss.h"
+#include "learner/gae.h"
+#include "learner/policy_export.h"
+#include "learner/ppo_loss.h"
+#include "server/core/atomic_file.h"
+#include "server/service/server_log.h"
+
+namespace modskill::learner {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// A wire tensor as a torch tensor of `shape` (copied: the message buffer is reused).
+torch::Tensor ToTorch(const v1::Tensor& tensor, std::vector<int64_t> shape) {
+  switch (tensor.dtype()) {
+    case v1::FLOAT32:
+      return torch::from_blob(const_cast<char*>(tensor.data().data()), shape, torch::kFloat32).clone();
+    case v1::UINT8:
+      return torch::from_blob(const_cast<char*>(tensor.data().data()), shape, torch::kUInt8).to(torch::kFloat32);
+    case v1::INT32:
+      return torch::from_blob(const_cast<char*>(tensor.data().data()), shape, torch::kInt32).clone();
+    default:
+      return torch::Tensor();
+  }
+}
+
+bool AllFinite(const std::vector<torch::Tensor>& tensors) {
+  for (const torch::Tensor& t : tensors) {
+    if (!torch::isfinite(t).all().item<bool>()) return false;
+  }
+  return true;
+}
+
+// One session's share of an iteration's experience, [T, n, ...].
+struct SlotRollout {
+  SessionSlot* slot = nullptr;
+  int n = 0;
+  bool failed = false;
+  torch::Tensor obs, actions, log_prob, values, task_reward, dones, truncated, amp_next;
+  torch::Tensor next_obs;  // observation after the last step (raw)
+  std::vector<torch::Tensor> raw_obs;  // for the normalizer, after the update
+  torch::Tensor reward_terms_sum;
+};
+
+}  // namespace
+
+Trainer::Trainer(const TrainerConfig& config) : config_(config), generator_(at::detail::createCPUGenerator(config.seed)) {}
+
+absl::StatusOr<std::unique_ptr<Trainer>> Trainer::Create(const TrainerConfig& config) {
+  if (absl::Status status = config.Validate(); !status.ok()) return status;
+  std::error_code error;
+  std::filesystem::create_directories(config.run_dir, error);
+  if (error) return absl::PermissionDeniedError(absl::StrCat("--run_dir ", config.run_dir, ": ", error.message()));
+  const std::string probe = config.run_dir + "/.writable";
+  if (absl::Status status = WriteFileAtomically(probe, "ok"); !status.ok()) {
+    return absl::PermissionDeniedError(absl::StrCat("--run_dir ", config.run_dir, ": not writable: ", status.message()));
+  }
+  std::filesystem::remove(probe, error);
+  torch::manual_seed(config.seed);
+  std::unique_ptr<Trainer> trainer(new Trainer(config));
+  ServerPoolOptions pool;
+  pool.servers = config.servers;
+  pool.token = config.token;
+  pool.tls_ca_file = config.tls_ca_file;
+  pool.envs_per_server = config.envs_per_server;
+  pool.sessions_per_server = config.sessions_per_server;
+  pool.session.set_part_layout(config.part_layout);
+  for (const std::string& clip : config.motions) pool.session.add_motions(clip);
+  pool.session.set_termination(v1::TRAINING);
+  pool.session.set_amp_obs(v1::FULL);
+  trainer->servers_ = std::make_unique<ServerPool>(pool);
+  if (absl::Status status = trainer->WaitForServers(); !status.ok()) return status;
+  if (absl::Status status = trainer->BuildNetworks(*trainer->servers_->spec()); !status.ok()) return status;
+  const std::string checkpoint = config.run_dir + "/checkpoint.pt";
+  if (config.resume) {
+    if (absl::Status status = trainer->LoadCheckpoint(checkpoint); !status.ok()) return status;
+    LogLine("resumed %s at iteration %d (%lld env steps)", checkpoint, trainer->iteration_,
+            static_cast<long long>(trainer->env_steps_));
+  }
+  if (absl::Status status = WriteFileAtomically(config.run_dir + "/config.json", config.ToJson()); !status.ok()) {
+    return status;
+  }
+  return trainer;
+}
+
+absl::Status Trainer::WaitForServers() {
+  const absl::Time start = absl::Now();
+  bool announced = false;
+  while (true) {
+    if (servers_->Reconnect(static_cast<int64_t>(config_.seed) + iteration_) > 0) return absl::OkStatus();
+    const absl::Duration waited = absl::Now() - start;
+    if (waited > absl::Seconds(config_.server_timeout_s)) {
+      std::string tried;
+      for (const auto& slot : servers_->slots()) absl::StrAppend(&tried, "\n  ", slot->server, ": ", slot->last_error);
+      return absl::UnavailableError(absl::StrCat("no simulation server answered for ",
+                                                 absl::FormatDuration(waited), " (--server_timeout_s):", tried));
+    }
+    if (!announced) {
+      LogLine("waiting for a simulation server (up to %.0f s)", config_.server_timeout_s);
+      announced = true;
+    }
+    absl::SleepFor(absl::Milliseconds(500));
+  }
+}
+
+absl::Status Trainer::BuildNetworks(const v1::EnvSpec& spec) {
+  spec_ = spec;
+  layout_.obs_size = spec.obs_size();
+  layout_.action_size = spec.action_size();
+  layout_.amp_obs_size = static_cast<int64_t>(spec.amp_history()) * spec.amp_obs_per_frame();
+  for (const v1::BodyPart& part : spec.parts()) {
+    PartSlices slices;
+    slices.name = part.name();
+    slices.obs_start = part.obs().start();
+    slices.obs_size = part.obs().size();
+    slices.action_start = part.action().start();
+    slices.action_size = part.action().size();
+    layout_.parts.push_back(slices);
+  }
+  if (absl::Status status = layout_.Validate(); !status.ok()) {
+    return absl::FailedPreconditionError(absl::StrCat("server env spec: ", status.message()));
+  }
+  policy_ = ModSkillPolicy(layout_, config_.model);
+  critic_ = Critic(layout_.obs_size, config_.model.critic_hidden);
+  discriminator_ = AmpDiscriminator(layout_.amp_obs_size, config_.model.discriminator_hidden);
+  obs_norm_ = RunningMeanStd(layout_.obs_size);
+  amp_norm_ = RunningMeanStd(layout_.amp_obs_size);
+  std::vector<torch::Tensor> parameters = policy_->parameters();
+  for (const torch::Tensor& p : critic_->parameters()) parameters.push_back(p);
+  optimizer_ = std::make_unique<torch::optim::Adam>(parameters, torch::optim::AdamOptions(config_.learning_rate));
+  discriminator_optimizer_ = std::make_unique<torch::optim::Adam>(
+      discriminator_->parameters(), torch::optim::AdamOptions(config_.discriminator_learning_rate));
+  return absl::OkStatus();
+}
+
+absl::Status Trainer::Run(const std::function<void(const IterationStats&)>& on_iteration,
+                          const std::atomic<bool>* stop) {
+  const int last = iteration_ + config_.iterations;
+  while (iteration_ < last) {
+    if (stop != nullptr && stop->load()) break;
+    absl::StatusOr<IterationStats> stats;
+    try {
+      torch::AutoGradMode grad(true);  // whatever the caller's mode, the update needs gradients
+      stats = Iterate();
+    } catch (const std::exception& e) {
+      std::string message = e.what();
+      return absl::InternalError(absl::StrCat("iteration ", iteration_ + 1, ": ", message.substr(0, message.find('\n'))));
+    }
+    if (!stats.ok()) return stats.status();
+    history_.push_back(*stats);
+    if (on_iteration) on_iteration(*stats);
+    if (iteration_ % config_.checkpoint_every == 0 || iteration_ == last) {
+      if (absl::Status status = SaveCheckpoint(config_.run_dir + "/checkpoint.pt"); !status.ok()) return status;
+      if (absl::Status status = ExportPolicy(config_.run_dir + "/policy.pt"); !status.ok()) return status;
+    }
+  }
+  return absl::OkStatus();
+}
+
+absl::StatusOr<IterationStats> Trainer::Iterate() {
+  IterationStats stats;
+  const auto start = Clock::now();
+  servers_->Reconnect(static_cast<int64_t>(config_.seed) + iteration_ + 1);
+  if (servers_->Alive().empty()) {
+    if (absl::Status status = WaitForServers(); !status.ok()) return status;
+  }
+  const int T = config_.horizon;
+  const int64_t O = layout_.obs_size, A = layout_.action_size, M = layout_.amp_obs_size;
+  const int64_t terms = spec_.reward_terms_size();
+  torch::Tensor log_std = policy_->log_std();
+  const torch::Tensor std_dev = log_std.exp();
+
+  std::vector<SlotRollout> rollouts;
+  for (SessionSlot* slot : servers_->Alive()) {
+    SlotRollout r;
+    r.slot = slot;
+    r.n = slot->num_envs();
+    r.obs = torch::zeros({T, r.n, O});
+    r.actions = torch::zeros({T, r.n, A});
+    r.log_prob = torch::zeros({T, r.n});
+    r.values = torch::zeros({T, r.n});
+    r.task_reward = torch::zeros({T, r.n});
+    r.dones = torch::zeros({T, r.n});
+    r.truncated = torch::zeros({T, r.n});
+    r.amp_next = torch::zeros({T, r.n, M});
+    r.reward_terms_sum = torch::zeros({terms}, torch::kFloat64);
+    rollouts.push_back(std::move(r));
+  }
+  // Where each slot's envs are: the last result, or the first observation of a new session.
+  auto current_obs = [&](SessionSlot* slot) {
+    const bool fresh = slot->stream->opened().initial().step() == 0 && slot->stream->result().obs().data().empty();
+    const v1::StepResult& result = fresh ? slot->stream->opened().initial() : slot->stream->result();
+    return ToTorch(result.obs(), {slot->num_envs(), O});
+  };
+  // Samples actions for `obs` into step t of `r` and sends them.
+  // Observations are normalized with the statistics of the iteration's start and stored
+  // normalized, so that PPO's ratios compare the same inputs; the statistics absorb the
+  // iteration's observations after the update. (With sigma = exp(-2.9), drifting inputs
+  // alone would move log-probabilities by tens of nats.)
+  auto act = [&](SlotRollout& r, int t, const torch::Tensor& obs) -> absl::Status {
+    torch::NoGradGuard no_grad;
+    const torch::Tensor normalized = obs_norm_->Normalize(obs);
+    r.raw_obs.push_back(obs);
+    const torch::Tensor mean = policy_->forward(normalized);
+    const torch::Tensor action = mean + std_dev * torch::randn(mean.sizes(), generator_);
+    r.obs[t].copy_(normalized);
+    r.actions[t].copy_(action);
+    r.log_prob[t].copy_(ModSkillPolicyImpl::LogProb(mean, log_std, action));
+    r.values[t].copy_(critic_->forward(normalized));
+    const torch::Tensor contiguous = action.contiguous();
+    return r.slot->stream->SendActions(contiguous.data_ptr<float>());
+  };
+  auto fail = [&](SlotRollout& r, const absl::Status& status) {
+    r.failed = true;
+    servers_->MarkDead(r.slot, status);
+  };
+
+  if (episode_return_.size() < servers_->slots().size()) {
+    episode_return_.resize(servers_->slots().size());
+    episode_length_.resize(servers_->slots().size());
+  }
+  std::unordered_map<SessionSlot*, size_t> slot_index;
+  for (size_t i = 0; i < servers_->slots().size(); ++i) slot_index[servers_->slots()[i].get()] = i;
+  for (SlotRollout& r : rollouts) {
+    auto& returns = episode_return_[slot_index[r.slot]];
+    auto& lengths = episode_length_[slot_index[r.slot]];
+    if (returns.size() != static_cast<size_t>(r.n)) {
+      returns.assign(r.n, 0.0);
+      lengths.assign(r.n, 0);
+    }
+    if (absl::Status status = act(r, 0, current_obs(r.slot)); !status.ok()) fail(r, status);
+  }
+  // Round robin: while one session's server steps, the learner computes another's actions.
+  for (int t = 0; t < T; ++t) {
+    for (SlotRollout& r : rollouts) {
+      if (r.failed) continue;
+      if (absl::Status status = r.slot->stream->ReceiveResult(); !status.ok()) {
+        fail(r, status);
+        continue;
+      }
+      const v1::StepResult& result = r.slot->stream->result();
+      const torch::Tensor reward = ToTorch(result.reward(), {r.n});
+      const torch::Tensor done = ToTorch(result.done(), {r.n});
+      r.task_reward[t].copy_(reward);
+      r.dones[t].copy_(done);
+      r.truncated[t].copy_(ToTorch(result.truncated(), {r.n}));
+      r.amp_next[t].copy_(ToTorch(result.amp_obs(), {r.n, M}));
+      r.reward_terms_sum += ToTorch(result.reward_terms(), {r.n, terms}).to(torch::kFloat64).sum(0);
+      auto& returns = episode_return_[slot_index[r.slot]];
+      auto& lengths = episode_length_[slot_index[r.slot]];
+      const float* reward_data = reward.data_ptr<float>();
+      const float* done_data = done.data_ptr<float>();
+      for (int i = 0; i < r.n; ++i) {
+        returns[i] += reward_data[i];
+        ++lengths[i];
+        if (done_data[i] > 0.5f) {
+          recent_returns_.push_back(returns[i]);
+          recent_lengths_.push_back(lengths[i]);
+          returns[i] = 0;
+          lengths[i] = 0;
+        }
+      }
+      const torch::Tensor next = ToTorch(result.obs(), {r.n, O});
+      if (t + 1 < T) {
+        if (absl::Status status = act(r, t + 1, next); !status.ok()) fail(r, status);
+      } else {
+        r.next_obs = next;
+      }
+    }
+  }
+  const size_t keep = 200;
+  if (recent_returns_.size() > keep) {
+    recent_returns_.erase(recent_returns_.begin(), recent_returns_.end() - keep);
+    recent_lengths_.erase(recent_lengths_.begin(), recent_lengths_.end() - keep);
+  }
+  std::vector<SlotRollout*> usable;
+  for (SlotRollout& r : rollouts) {
+    if (!r.failed) usable.push_back(&r);
+  }
+  stats.collect_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  if (usable.empty()) {
+    // Every server failed during this iteration: nothing to learn from; try again.
+    stats.iteration = iteration_;
+    stats.env_steps = env_steps_;
+    LogLine("iteration %d: every session failed while collecting; retrying", iteration_ + 1);
+    return stats;
+  }
+
+  // Rewards: task (imitation + energy, from the server) and AMP style, then GAE per session.
+  std::vector<torch::Tensor> all_obs, all_actions, all_log_prob, all_values, all_advantages, all_returns, policy_amp;
+  double task_sum = 0, amp_sum = 0, samples = 0;
+  torch::Tensor terms_sum = torch::zeros({terms}, torch::kFloat64);
+  {
+    torch::NoGradGuard no_grad;
+    for (SlotRollout* r : usable) {
+      const torch::Tensor amp_flat = r->amp_next.reshape({-1, M});
+      const torch::Tensor amp_reward =
+          AmpReward(discriminator_->forward(amp_norm_->Normalize(amp_flat))).reshape({T, r->n}) * (1 - r->dones);
+      const torch::Tensor last_values = critic_->forward(obs_norm_->Normalize(r->next_obs));
+      // Time-outs bootstrap from the value of the state they ended in (rl_games' trick: the
+      // row's next observation already belongs to the next episode).
+      const torch::Tensor rewards = config_.task_reward_weight * r->task_reward +
+                                    config_.amp_reward_weight * amp_reward +
+                                    config_.gamma * r->values * r->truncated;
+      torch::Tensor advantages, returns;
+      ComputeGae(rewards, r->values, r->dones, last_values, config_.gamma, config_.lambda, &advantages, &returns);
+      all_obs.push_back(r->obs.reshape({-1, O}));
+      all_actions.push_back(r->actions.reshape({-1, A}));
+      all_log_prob.push_back(r->log_prob.reshape({-1}));
+      all_values.push_back(r->values.reshape({-1}));
+      all_advantages.push_back(advantages.reshape({-1}));
+      all_returns.push_back(returns.reshape({-1}));
+      policy_amp.push_back(amp_flat.index({(r->dones.reshape({-1}) < 0.5)}));
+      task_sum += r->task_reward.sum().item<double>();
+      amp_sum += amp_reward.sum().item<double>();
+      samples += static_cast<double>(T) * r->n;
+      terms_sum += r->reward_terms_sum;
+    }
+  }
+  const torch::Tensor obs = torch::cat(all_obs), actions = torch::cat(all_actions);
+  const torch::Tensor old_log_prob = torch::cat(all_log_prob), old_values = torch::cat(all_values);
+  const torch::Tensor advantages = NormalizeAdvantages(torch::cat(all_advantages)), returns = torch::cat(all_returns);
+  const torch::Tensor& normalized_obs = obs;  // stored normalized
+  const int64_t batch = obs.size(0);
+  const auto update_start = Clock::now();
+
+  // PPO (Schulman et al. 2017). A non-finite loss skips its minibatch; non-finite weights after
+  // the update roll back to the weights it started from.
+  std::vector<torch::Tensor> snapshot;
+  for (const torch::Tensor& p : optimizer_->param_groups()[0].params()) snapshot.push_back(p.detach().clone());
+  double policy_loss = 0, value_loss = 0, approx_kl = 0, clip_fraction = 0;
+  int updates = 0;
+  const int64_t minibatch = std::min<int64_t>(config_.minibatch_size, batch);
+  for (int epoch = 0; epoch < config_.epochs; ++epoch) {
+    const torch::Tensor order = torch::randperm(batch, generator_);
+    for (int64_t begin = 0; begin + minibatch <= batch; begin += minibatch) {
+      const torch::Tensor index = order.slice(0, begin, begin + minibatch);
+      const torch::Tensor mb_obs = normalized_obs.index_select(0, index);
+      const torch::Tensor mean = policy_->forward(mb_obs);
+      const torch::Tensor new_log_prob = ModSkillPolicyImpl::LogProb(mean, log_std, actions.index_select(0, index));
+      const torch::Tensor new_values = critic_->forward(mb_obs);
+      PpoLossTerms loss = ComputePpoLoss(new_log_prob, old_log_prob.index_select(0, index),
+                                         advantages.index_select(0, index), new_values,
+                                         old_values.index_select(0, index), returns.index_select(0, index),
+                                         config_.clip_ratio, config_.value_clip, config_.value_coefficient);
+      if (!std::isfinite(loss.total.item<double>())) {
+        ++stats.skipped_updates;
+        continue;
+      }
+      optimizer_->zero_grad();
+      loss.total.backward();
+      torch::nn::utils::clip_grad_norm_(optimizer_->param_groups()[0].params(), config_.max_grad_norm);
+      optimizer_->step();
+      policy_loss += loss.policy_loss.item<double>();
+      value_loss += loss.value_loss.item<double>();
+      approx_kl += loss.approx_kl.item<double>();
+      clip_fraction += loss.clip_fraction.item<double>();
+      ++updates;
+    }
+  }
+  if (!AllFinite(optimizer_->param_groups()[0].params())) {
+    torch::NoGradGuard no_grad;
+    auto& params = optimizer_->param_groups()[0].params();
+    for (size_t i = 0; i < params.size(); ++i) params[i].copy_(snapshot[i]);
+    LogLine("iteration %d: non-finite weights after the update; kept the last good ones", iteration_ + 1);
+    ++stats.skipped_updates;
+  }
+  if (stats.skipped_updates > 0) {
+    LogLine("iteration %d: skipped %d updates with a non-finite loss", iteration_ + 1, stats.skipped_updates);
+  }
+
+  {
+    std::vector<torch::Tensor> raw;
+    for (SlotRollout* r : usable) raw.insert(raw.end(), r->raw_obs.begin(), r->raw_obs.end());
+    obs_norm_->Update(torch::cat(raw));
+  }
+
+  // AMP discriminator: reference histories from the server against the policy's own.
+  const torch::Tensor policy_samples = torch::cat(policy_amp);
+  if (config_.amp_reward_weight > 0 && policy_samples.size(0) > 0) {
+    v1::SampleReferenceAmpRequest request;
+    request.set_session_id(usable.front()->slot->stream->opened().session_id());
+    request.set_num_samples(config_.amp_samples);
+    request.set_seed(config_.seed * 1000003 + iteration_);
+    auto reference = usable.front()->slot->client->SampleReferenceAmp(request);
+    if (!reference.ok()) {
+      LogLine("iteration %d: no reference AMP samples (%s); discriminator not updated", iteration_ + 1,
+              reference.status().message());
+    } else {
+      const torch::Tensor expert = ToTorch(reference->amp_obs(), {config_.amp_samples, M});
+      amp_norm_->Update(torch::cat({expert, policy_samples}));
+      double loss_sum = 0, expert_logit = 0, policy_logit = 0, penalty = 0;
+      for (int epoch = 0; epoch < config_.discriminator_epochs; ++epoch) {
+        const torch::Tensor pick =
+            torch::randint(policy_samples.size(0), {config_.amp_samples}, generator_, torch::kLong);
+        const torch::Tensor expert_in = amp_norm_->Normalize(expert).detach().requires_grad_(true);
+        const torch::Tensor policy_in = amp_norm_->Normalize(policy_samples.index_select(0, pick));
+        const torch::Tensor gradient_penalty = discriminator_->GradientPenalty(expert_in);
+        AmpLossTerms loss = ComputeAmpLoss(discriminator_->forward(expert_in), discriminator_->forward(policy_in),
+                                           gradient_penalty, config_.gradient_penalty_weight);
+        if (!std::isfinite(loss.total.item<double>())) {
+          ++stats.skipped_updates;
+          continue;
+        }
+        discriminator_optimizer_->zero_grad();
+        loss.total.backward();
+        discriminator_optimizer_->step();
+        loss_sum += loss.total.item<double>();
+        expert_logit += loss.expert_logit_mean.item<double>();
+        policy_logit += loss.policy_logit_mean.item<double>();
+        penalty += loss.gradient_penalty.item<double>();
+      }
+      const double epochs = config_.discriminator_epochs;
+      stats.discriminator_loss = loss_sum / epochs;
+      stats.expert_logit = expert_logit / epochs;
+      stats.policy_logit = policy_logit / epochs;
+      stats.gradient_penalty = penalty / epochs;
+    }
+  }
+
+  ++iteration_;
+  env_steps_ += static_cast<int64_t>(samples);
+  stats.iteration = iteration_;
+  stats.env_steps = env_steps_;
+  stats.update_seconds = std::chrono::duration<double>(Clock::now() - update_start).count();
+  const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  stats.env_steps_per_second = samples / seconds;
+  stats.mean_task_reward = task_sum / samples;
+  stats.mean_amp_reward = amp_sum / samples;
+  for (int64_t k = 0; k < std::min<int64_t>(terms, 8); ++k) stats.reward_terms[k] = terms_sum[k].item<double>() / samples;
+  if (!recent_returns_.empty()) {
+    double r = 0, l = 0;
+    for (size_t i = 0; i < recent_returns_.size(); ++i) {
+      r += recent_returns_[i];
+      l += recent_lengths_[i];
+    }
+    stats.mean_episode_return = r / recent_returns_.size();
+    stats.mean_episode_length = l / recent_lengths_.size();
+  }
+  if (updates > 0) {
+    stats.policy_loss = policy_loss / updates;
+    stats.value_loss = value_loss / updates;
+    stats.approx_kl = approx_kl / updates;
+    stats.clip_fraction = clip_fraction / updates;
+  }
+  stats.live_sessions = static_cast<int>(usable.size());
+  return stats;
+}
+
+absl::Status Trainer::SaveCheckpoint(const std::string& path) {
+  try {
+    torch::serialize::OutputArchive archive;
+    auto add_module = [&](const char* key, const torch::nn::Module& module) {
+      torch::serialize::OutputArchive sub;
+      module.save(sub);
+      archive.write(key, sub);
+    };
+    add_module("policy", *policy_);
+    add_module("critic", *critic_);
+    add_module("discriminator", *discriminator_);
+    add_module("obs_norm", *obs_norm_);
+    add_module("amp_norm", *amp_norm_);
+    torch::serialize::OutputArchive optimizer, discriminator_optimizer;
+    optimizer_->save(optimizer);
+    discriminator_optimizer_->save(discriminator_optimizer);
+    archive.write("optimizer", optimizer);
+    archive.write("discriminator_optimizer", discriminator_optimizer);
+    archive.write("iteration", torch::tensor(static_cast<int64_t>(iteration_)));
+    archive.write("env_steps", torch::tensor(static_cast<int64_t>(env_steps_)));
+    archive.write("obs_size", torch::tensor(layout_.obs_size));
+    archive.write("action_size", torch::tensor(layout_.action_size));
+    archive.write("amp_obs_size", torch::tensor(layout_.amp_obs_size));
+    std::ostringstream out(std::ios::binary);
+    archive.save_to(out);
+    return WriteFileAtomically(path, out.str());
+  } catch (const std::exception& e) {
+    std::string message = e.what();
+    return absl::InternalError(absl::StrCat(path, ": cannot write checkpoint: ", message.substr(0, message.find('\n'))));
+  }
+}
+
+absl::Status Trainer::LoadCheckpoint(const std::string& path) {
+  auto bytes = ReadFileToString(path, size_t{4} << 30);
+  if (!bytes.ok()) return bytes.status();
+  try {
+    torch::serialize::InputArchive archive;
+    std::istringstream in(*bytes, std::ios::binary);
+    archive.load_from(in);
+    torch::Tensor obs_size, action_size, amp_obs_size, iteration, env_steps;
+    archive.read("obs_size", obs_size);
+    archive.read("action_size", action_size);
+    archive.read("amp_obs_size", amp_obs_size);
+    if (obs_size.item<int64_t>() != layout_.obs_size || action_size.item<int64_t>() != layout_.action_size ||
+        amp_obs_size.item<int64_t>() != layout_.amp_obs_size) {
+      return absl::FailedPreconditionError(
+          absl::StrCat(path, ": trained with obs ", obs_size.item<int64_t>(), ", actions ", action_size.item<int64_t>(),
+                       ", AMP obs ", amp_obs_size.item<int64_t>(), "; the server has ", layout_.obs_size, ", ",
+                       layout_.action_size, ", ", layout_.amp_obs_size));
+    }
+    auto load_module = [&](const char* key, torch::nn::Module& module) {
+      torch::serialize::InputArchive sub;
+      archive.read(key, sub);
+      module.load(sub);
+    };
+    load_module("policy", *policy_);
+    load_module("critic", *critic_);
+    load_module("discriminator", *discriminator_);
+    load_module("obs_norm", *obs_norm_);
+    load_module("amp_norm", *amp_norm_);
+    torch::serialize::InputArchive optimizer, discriminator_optimizer;
+    archive.read("optimizer", optimizer);
+    archive.read("discriminator_optimizer", discriminator_optimizer);
+    optimizer_->load(optimizer);
+    discriminator_optimizer_->load(discriminator_optimizer);
+    archive.read("iteration", iteration);
+    archive.read("env_steps", env_steps);
+    iteration_ = static_cast<int>(iteration.item<int64_t>());
+    env_steps_ = env_steps.item<int64_t>();
+  } catch (const std::exception& e) {
+    std::string message = e.what();
+    return absl::InvalidArgumentError(
+        absl::StrCat(path, ": not a loadable training checkpoint (different preset or layout?): ",
+                     message.substr(0, message.find('\n'))));
+  }
+  return absl::OkStatus();
+}
+
+absl::Status Trainer::ExportPolicy(const std::string& path) {
+  PolicySpec spec;
+  spec.part_layout = spec_.part_layout();
+  spec.obs_size = static_cast<int>(layout_.obs_size);
+  spec.action_size = static_cast<int>(layout_.action_size);
+  spec.joint_names.assign(spec_.joint_names().begin(), spec_.joint_names().end());
+  spec.control_dt = spec_.control_dt();
+  return learner::ExportPolicy(policy_, obs_norm_, spec, path);
+}
+
+}  // namespace modskill::learner

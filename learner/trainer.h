@@ -1,0 +1,94 @@
+// ModSkill training: part-level PPO with an AMP discriminator, driving one or many simulation
+// servers over gRPC (DESIGN.md section 3). The learner runs inference for every env it drives
+// (central inference) and overlaps each session's simulation with the other sessions' inference.
+#ifndef MODSKILL_LEARNER_TRAINER_H_
+#define MODSKILL_LEARNER_TRAINER_H_
+
+#include <atomic>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <torch/torch.h>
+
+#include "absl/status/status.h"
+#include "learner/amp_discriminator.h"
+#include "learner/critic.h"
+#include "learner/modskill_policy.h"
+#include "learner/running_mean_std.h"
+#include "learner/server_pool.h"
+#include "learner/trainer_config.h"
+
+namespace modskill::learner {
+
+// What one iteration measured; also written to TensorBoard and the CSV.
+struct IterationStats {
+  int iteration = 0;
+  int64_t env_steps = 0;          // total so far
+  double collect_seconds = 0;
+  double update_seconds = 0;
+  double env_steps_per_second = 0;  // this iteration, collection and update included
+  double mean_task_reward = 0;    // per step, from the server (imitation + energy)
+  double mean_amp_reward = 0;
+  double mean_episode_return = 0;  // task reward, episodes completed recently
+  double mean_episode_length = 0;
+  double reward_terms[8] = {};
+  double policy_loss = 0, value_loss = 0, approx_kl = 0, clip_fraction = 0;
+  double discriminator_loss = 0, expert_logit = 0, policy_logit = 0, gradient_penalty = 0;
+  int live_sessions = 0;
+  int skipped_updates = 0;  // minibatches skipped for a non-finite loss
+};
+
+class Trainer {
+ public:
+  static absl::StatusOr<std::unique_ptr<Trainer>> Create(const TrainerConfig& config);
+
+  // Runs config.iterations iterations (after those of a resumed run). `on_iteration` sees each
+  // iteration's figures. Returns when done, when `stop` becomes true, or on a fatal error.
+  absl::Status Run(const std::function<void(const IterationStats&)>& on_iteration = nullptr,
+                   const std::atomic<bool>* stop = nullptr);
+
+  int iteration() const { return iteration_; }
+  int64_t env_steps() const { return env_steps_; }
+  const std::vector<IterationStats>& history() const { return history_; }
+  ModSkillPolicy& policy() { return policy_; }
+  RunningMeanStd& obs_norm() { return obs_norm_; }
+  ServerPool& servers() { return *servers_; }
+
+  // Full training state (networks, optimizers, normalizers, counters), written atomically.
+  absl::Status SaveCheckpoint(const std::string& path);
+  absl::Status LoadCheckpoint(const std::string& path);
+  // The TorchScript policy the server's Rollout and Python's torch.jit.load run.
+  absl::Status ExportPolicy(const std::string& path);
+
+ private:
+  explicit Trainer(const TrainerConfig& config);
+  absl::Status WaitForServers();
+  absl::Status BuildNetworks(const v1::EnvSpec& spec);
+  absl::StatusOr<IterationStats> Iterate();
+
+  TrainerConfig config_;
+  std::unique_ptr<ServerPool> servers_;
+  v1::EnvSpec spec_;
+  NetworkLayout layout_;
+  ModSkillPolicy policy_{nullptr};
+  Critic critic_{nullptr};
+  AmpDiscriminator discriminator_{nullptr};
+  RunningMeanStd obs_norm_{nullptr};
+  RunningMeanStd amp_norm_{nullptr};
+  std::unique_ptr<torch::optim::Adam> optimizer_;
+  std::unique_ptr<torch::optim::Adam> discriminator_optimizer_;
+  int iteration_ = 0;
+  int64_t env_steps_ = 0;
+  std::vector<IterationStats> history_;
+  // Episode bookkeeping per env slot of each session.
+  std::vector<std::vector<double>> episode_return_;
+  std::vector<std::vector<int>> episode_length_;
+  std::vector<double> recent_returns_, recent_lengths_;
+  torch::Generator generator_;
+};
+
+}  // namespace modskill::learner
+
+#endif  // MODSKILL_LEARNER_TRAINER_H_

@@ -1,0 +1,76 @@
+#include "learner/trainer_config.h"
+
+#include <nlohmann/json.hpp>
+
+#include "absl/strings/str_cat.h"
+
+namespace modskill::learner {
+
+absl::StatusOr<TrainerConfig> TrainerConfig::ForPreset(const std::string& preset) {
+  auto model = ModelConfig::Preset(preset);
+  if (!model.ok()) return model.status();
+  TrainerConfig config;
+  config.model = *model;
+  if (preset == "paper") {
+    // DESIGN.md section 3 (PHC): lr 2e-5, horizon 32, minibatch 16384, 6 epochs, 3072 envs.
+    config.learning_rate = 2e-5;
+    config.discriminator_learning_rate = 2e-5;
+    config.epochs = 6;
+    config.minibatch_size = 16384;
+    config.envs_per_server = 3072;
+  }
+  return config;
+}
+
+absl::Status TrainerConfig::Validate() const {
+  auto bad = [](absl::string_view field, auto value, absl::string_view why) {
+    return absl::InvalidArgumentError(absl::StrCat("--", field, ": ", value, " ", why));
+  };
+  if (servers.empty()) return absl::InvalidArgumentError("--servers: no server given");
+  if (envs_per_server < 1) return bad("envs_per_server", envs_per_server, "must be >= 1");
+  if (sessions_per_server < 1 || sessions_per_server > envs_per_server) {
+    return bad("sessions_per_server", sessions_per_server, "must be in [1, envs_per_server]");
+  }
+  if (iterations < 0) return bad("iterations", iterations, "must be >= 0");
+  if (horizon < 1) return bad("horizon", horizon, "must be >= 1");
+  if (epochs < 1) return bad("epochs", epochs, "must be >= 1");
+  if (minibatch_size < 1) return bad("minibatch_size", minibatch_size, "must be >= 1");
+  if (!(learning_rate > 0 && learning_rate < 1)) return bad("learning_rate", learning_rate, "must be in (0, 1)");
+  if (!(gamma > 0 && gamma <= 1)) return bad("gamma", gamma, "must be in (0, 1]");
+  if (!(lambda >= 0 && lambda <= 1)) return bad("lambda", lambda, "must be in [0, 1]");
+  if (amp_samples < 1) return bad("amp_samples", amp_samples, "must be >= 1");
+  if (task_reward_weight < 0 || amp_reward_weight < 0) return absl::InvalidArgumentError("reward weights must be >= 0");
+  if (run_dir.empty()) return absl::InvalidArgumentError("--run_dir: required");
+  if (checkpoint_every < 1) return bad("checkpoint_every", checkpoint_every, "must be >= 1");
+  if (!(server_timeout_s > 0)) return bad("server_timeout_s", server_timeout_s, "must be > 0");
+  return absl::OkStatus();
+}
+
+std::string TrainerConfig::ToJson() const {
+  nlohmann::json json;
+  json["servers"] = servers;
+  json["envs_per_server"] = envs_per_server;
+  json["sessions_per_server"] = sessions_per_server;
+  json["part_layout"] = part_layout;
+  json["motions"] = motions;
+  json["preset"] = model.preset;
+  json["whole_body"] = model.whole_body;
+  json["attention"] = model.attention;
+  json["embed_dim"] = model.embed_dim;
+  json["iterations"] = iterations;
+  json["horizon"] = horizon;
+  json["epochs"] = epochs;
+  json["minibatch_size"] = minibatch_size;
+  json["learning_rate"] = learning_rate;
+  json["gamma"] = gamma;
+  json["lambda"] = lambda;
+  json["clip_ratio"] = clip_ratio;
+  json["task_reward_weight"] = task_reward_weight;
+  json["amp_reward_weight"] = amp_reward_weight;
+  json["discriminator_learning_rate"] = discriminator_learning_rate;
+  json["gradient_penalty_weight"] = gradient_penalty_weight;
+  json["seed"] = seed;
+  return json.dump(1);
+}
+
+}  // namespace modskill::learner

@@ -1,0 +1,384 @@
+// The learner's networks (learner/): shapes, attention, part independence of the controllers,
+// log-probabilities, serialization, the TorchScript export the server runs, the ablations, the
+// AMP gradient penalty and the layout checks. Layouts come from the real env spec.
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <torch/script.h>
+#include <torch/torch.h>
+
+#include "learner/amp_discriminator.h"
+#include "learner/critic.h"
+#include "learner/model_config.h"
+#include "learner/modskill_policy.h"
+#include "learner/part_controller.h"
+#include "learner/policy_export.h"
+#include "learner/running_mean_std.h"
+#include "learner/skill_attention.h"
+#include "server/core/env_spec.h"
+#include "server/core/humanoid_model.h"
+#include "server/core/humanoid_spec.h"
+#include "server/core/part_layout.h"
+#include "server/core/physics_options.h"
+#include "server/service/policy_checkpoint.h"
+
+namespace modskill::learner {
+namespace {
+
+using ::testing::HasSubstr;
+
+// The env spec of the shipped humanoid with the named part layout, built once per layout.
+const EnvSpec& Spec(const std::string& layout_name) {
+  static std::map<std::string, EnvSpec>* specs = new std::map<std::string, EnvSpec>();
+  auto it = specs->find(layout_name);
+  if (it != specs->end()) return it->second;
+  auto humanoid_spec = HumanoidSpec::LoadDefault();
+  EXPECT_TRUE(humanoid_spec.ok()) << humanoid_spec.status();
+  auto humanoid = HumanoidModel::Create(*humanoid_spec, PhysicsOptions());
+  EXPECT_TRUE(humanoid.ok()) << humanoid.status();
+  auto catalog = PartLayoutCatalog::LoadDefault(*humanoid_spec);
+  EXPECT_TRUE(catalog.ok()) << catalog.status();
+  auto layout = catalog->Get(layout_name);
+  EXPECT_TRUE(layout.ok()) << layout.status();
+  return specs->emplace(layout_name, MakeEnvSpec(**humanoid, *layout)).first->second;
+}
+
+NetworkLayout Layout(const std::string& name = "5part") { return LayoutFromEnvSpec(Spec(name)); }
+
+ModelConfig Config(const std::string& preset = "small") {
+  auto config = ModelConfig::Preset(preset);
+  EXPECT_TRUE(config.ok()) << config.status();
+  return *config;
+}
+
+std::string TmpPath(const std::string& name) {
+  std::filesystem::create_directories(MODSKILL_TEST_TMP_DIR);
+  return std::string(MODSKILL_TEST_TMP_DIR) + "/" + name;
+}
+
+// The spec of the server's env, as a checkpoint stores it.
+PolicySpec SpecOf(const std::string& layout_name = "5part") { return PolicySpec::FromEnvSpec(Spec(layout_name)); }
+
+// Observation statistics as after some training: per-feature means and variances far from 0 and 1.
+RunningMeanStd TrainedNormalizer(int64_t size) {
+  RunningMeanStd norm(size);
+  for (int i = 0; i < 3; ++i) norm->Update(torch::randn({64, size}) * 3.0 + torch::linspace(-2, 2, size));
+  return norm;
+}
+
+TEST(LearnerNetworksTest, EnvLayoutMatchesTheEnvSpec) {
+  const NetworkLayout layout = Layout("5part");
+  EXPECT_EQ(layout.obs_size, 934);
+  EXPECT_EQ(layout.action_size, 69);
+  EXPECT_EQ(layout.amp_obs_size, 2320);
+  ASSERT_EQ(layout.parts.size(), 5u);
+  const std::vector<int64_t> action_sizes = {12, 12, 15, 15, 15};
+  for (size_t p = 0; p < 5; ++p) EXPECT_EQ(layout.parts[p].action_size, action_sizes[p]) << layout.parts[p].name;
+  EXPECT_TRUE(layout.Validate().ok()) << layout.Validate();
+}
+
+// (1) z is [B, P, E] with unit norm, for every layout of the catalog and both presets.
+TEST(LearnerNetworksTest, EmbeddingShapesAndUnitNorms) {
+  torch::manual_seed(1);
+  struct Case {
+    std::string layout, preset;
+    int64_t parts;
+  };
+  for (const Case& c : std::vector<Case>{{"1part", "small", 1},
+                                         {"2part", "small", 2},
+                                         {"3part", "small", 3},
+                                         {"5part", "small", 5},
+                                         {"5part", "paper", 5}}) {
+    SCOPED_TRACE(c.layout + " " + c.preset);
+    const NetworkLayout layout = Layout(c.layout);
+    const ModelConfig config = Config(c.preset);
+    ModSkillPolicy policy(layout, config);
+    const int64_t batch = 4;
+    const torch::Tensor obs = torch::randn({batch, layout.obs_size});
+    torch::NoGradGuard no_grad;
+    const SkillAttentionOutput skills = policy->skills(obs);
+    EXPECT_EQ(skills.z.sizes(), (std::vector<int64_t>{batch, c.parts, config.embed_dim}));
+    EXPECT_EQ(skills.attention.sizes(), (std::vector<int64_t>{batch, c.parts, c.parts}));
+    EXPECT_TRUE(torch::allclose(skills.z.norm(2, -1), torch::ones({batch, c.parts}), 1e-5, 1e-5));
+    EXPECT_EQ(policy->forward(obs).sizes(), (std::vector<int64_t>{batch, layout.action_size}));
+    Critic critic(layout.obs_size, config.critic_hidden);
+    EXPECT_EQ(critic->forward(obs).sizes(), (std::vector<int64_t>{batch}));
+  }
+  EXPECT_EQ(Config("paper").embed_dim, 64);
+  EXPECT_EQ(Config("paper").controller_hidden, (std::vector<int64_t>{2048, 1536, 1024, 512}));
+  EXPECT_EQ(Config("small").embed_dim, 32);
+}
+
+// (2) Attention rows are distributions; with attention on they mix parts, with it off they are the identity.
+TEST(LearnerNetworksTest, AttentionRowsSumToOne) {
+  torch::manual_seed(2);
+  const NetworkLayout layout = Layout("5part");
+  const torch::Tensor obs = torch::randn({8, layout.obs_size});
+  const torch::Tensor eye = torch::eye(5).expand({8, 5, 5});
+  torch::NoGradGuard no_grad;
+
+  SkillAttention attention(layout, Config());
+  const SkillAttentionOutput on = attention->forward(obs);
+  EXPECT_TRUE(torch::allclose(on.attention.sum(-1), torch::ones({8, 5}), 1e-5, 1e-6));
+  EXPECT_TRUE((on.attention >= 0).all().item<bool>());
+  EXPECT_GT((on.attention - eye).abs().max().item<float>(), 1e-3);
+
+  ModelConfig off_config = Config();
+  off_config.attention = false;
+  SkillAttention no_attention(layout, off_config);
+  EXPECT_TRUE(no_attention->keys().empty());
+  const SkillAttentionOutput off = no_attention->forward(obs);
+  EXPECT_TRUE(torch::equal(off.attention, eye));
+  // z_k is part k's own value, normalized.
+  const PartSlices& torso = layout.parts[2];
+  Mlp torso_value = no_attention->values()[2];
+  const torch::Tensor v = torso_value->forward(obs.slice(1, torso.obs_start, torso.obs_start + torso.obs_size));
+  EXPECT_TRUE(torch::allclose(off.z.select(1, 2), v / v.norm(2, -1, true), 1e-5, 1e-6));
+}
+
+// (3) Part k's controller moves only part k's actions.
+TEST(LearnerNetworksTest, PartControllerOnlyMovesItsOwnPart) {
+  torch::manual_seed(3);
+  const NetworkLayout layout = Layout("5part");
+  ModSkillPolicy policy(layout, Config());
+  const torch::Tensor means = policy->forward(torch::randn({4, layout.obs_size}));
+  const size_t num_parts = layout.parts.size();
+  ASSERT_EQ(policy->controllers().size(), num_parts);
+  for (size_t k = 0; k < num_parts; ++k) {
+    const PartSlices& part = layout.parts[k];
+    SCOPED_TRACE(part.name);
+    const torch::Tensor part_means = means.slice(1, part.action_start, part.action_start + part.action_size);
+    for (size_t j = 0; j < num_parts; ++j) {
+      const std::vector<torch::Tensor> params = policy->controllers()[j]->parameters();
+      const auto grads = torch::autograd::grad({part_means.sum()}, params, {}, /*retain_graph=*/true,
+                                               /*create_graph=*/false, /*allow_unused=*/true);
+      double norm = 0;
+      for (const torch::Tensor& g : grads) {
+        if (g.defined()) norm += g.abs().sum().item<double>();
+      }
+      if (j != k) {
+        EXPECT_EQ(norm, 0.0) << "controller of " << layout.parts[j].name;
+      }
+    }
+    // Every action of part k depends on part k's controller.
+    const std::vector<torch::Tensor> own = policy->controllers()[k]->parameters();
+    for (int64_t a = 0; a < part.action_size; ++a) {
+      const auto grads = torch::autograd::grad({part_means.select(1, a).sum()}, own, {}, /*retain_graph=*/true);
+      double norm = 0;
+      for (const torch::Tensor& g : grads) norm += g.abs().sum().item<double>();
+      EXPECT_GT(norm, 0.0) << "action " << part.action_start + a;
+    }
+  }
+}
+
+// (4) log N(mean | mean, sigma) = -A/2 log(2 pi) - sum(log sigma).
+TEST(LearnerNetworksTest, LogProbOfTheMean) {
+  torch::manual_seed(4);
+  const NetworkLayout layout = Layout("5part");
+  ModSkillPolicy policy(layout, Config());
+  EXPECT_TRUE(torch::allclose(policy->log_std(), torch::full({layout.action_size}, -2.9)));
+  torch::NoGradGuard no_grad;
+  const torch::Tensor mean = policy->forward(torch::randn({3, layout.obs_size}));
+  const torch::Tensor log_prob = ModSkillPolicyImpl::LogProb(mean, policy->log_std(), mean);
+  const double a = static_cast<double>(layout.action_size);
+  const double expected = -0.5 * a * std::log(2 * M_PI) + 2.9 * a;
+  ASSERT_EQ(log_prob.sizes(), (std::vector<int64_t>{3}));
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(log_prob[i].item<double>(), expected, 1e-3);
+  // One sigma away in one coordinate costs 1/2.
+  torch::Tensor moved = mean.clone();
+  moved.select(1, 0) += std::exp(-2.9);
+  EXPECT_NEAR(ModSkillPolicyImpl::LogProb(mean, policy->log_std(), moved)[0].item<double>(), expected - 0.5, 1e-3);
+}
+
+// (5) torch::save -> torch::load into a fresh module reproduces the outputs.
+TEST(LearnerNetworksTest, SaveLoadRoundTrip) {
+  torch::manual_seed(5);
+  const NetworkLayout layout = Layout("5part");
+  const ModelConfig config = Config();
+  ModSkillPolicy policy(layout, config);
+  RunningMeanStd norm = TrainedNormalizer(layout.obs_size);
+  Critic critic(layout.obs_size, config.critic_hidden);
+  AmpDiscriminator disc(layout.amp_obs_size, config.discriminator_hidden);
+  const std::string policy_path = TmpPath("learner_policy.pt"), norm_path = TmpPath("learner_norm.pt"),
+                    critic_path = TmpPath("learner_critic.pt"), disc_path = TmpPath("learner_disc.pt");
+  torch::save(policy, policy_path);
+  torch::save(norm, norm_path);
+  torch::save(critic, critic_path);
+  torch::save(disc, disc_path);
+
+  torch::manual_seed(55);
+  ModSkillPolicy loaded(layout, config);
+  RunningMeanStd loaded_norm(layout.obs_size);
+  Critic loaded_critic(layout.obs_size, config.critic_hidden);
+  AmpDiscriminator loaded_disc(layout.amp_obs_size, config.discriminator_hidden);
+  torch::load(loaded, policy_path);
+  torch::load(loaded_norm, norm_path);
+  torch::load(loaded_critic, critic_path);
+  torch::load(loaded_disc, disc_path);
+
+  torch::NoGradGuard no_grad;
+  const torch::Tensor raw = torch::randn({6, layout.obs_size}) * 4;
+  const torch::Tensor obs = norm->Normalize(raw);
+  EXPECT_TRUE(torch::equal(loaded_norm->Normalize(raw), obs));
+  EXPECT_TRUE(torch::equal(loaded_norm->count(), norm->count()));
+  EXPECT_TRUE(torch::equal(loaded->forward(obs), policy->forward(obs)));
+  EXPECT_TRUE(torch::equal(loaded->skills(obs).attention, policy->skills(obs).attention));
+  EXPECT_TRUE(torch::equal(loaded_critic->forward(obs), critic->forward(obs)));
+  const torch::Tensor amp = torch::randn({6, layout.amp_obs_size});
+  EXPECT_TRUE(torch::equal(loaded_disc->forward(amp), disc->forward(amp)));
+}
+
+// RunningMeanStd: merging batches gives the statistics of their union.
+TEST(LearnerNetworksTest, RunningMeanStdMergesBatches) {
+  torch::manual_seed(6);
+  const torch::Tensor data = torch::randn({300, 7}, torch::kFloat64) * 2.5 + 10.0;
+  RunningMeanStd norm(7);
+  norm->Update(data.slice(0, 0, 1));
+  norm->Update(data.slice(0, 1, 120));
+  norm->Update(data.slice(0, 120, 300));
+  EXPECT_EQ(norm->count().item<double>(), 300.0);
+  EXPECT_TRUE(torch::allclose(norm->mean(), data.mean(0), 1e-12, 1e-10));
+  EXPECT_TRUE(torch::allclose(norm->var(), data.var(0, /*unbiased=*/false), 1e-12, 1e-10));
+  const torch::Tensor x = torch::tensor({{1000.0f, -1000.0f, 10.0f, 10.0f, 10.0f, 10.0f, 10.0f}});
+  const torch::Tensor normalized = norm->Normalize(x);
+  EXPECT_EQ(normalized.scalar_type(), torch::kFloat32);
+  EXPECT_FLOAT_EQ(normalized[0][0].item<float>(), 5.0f);
+  EXPECT_FLOAT_EQ(normalized[0][1].item<float>(), -5.0f);
+}
+
+// Exports, checks the TorchScript against the C++ modules and the server's loader against both.
+void ExpectExportMatches(ModSkillPolicy& policy, const std::string& layout_name, const std::string& file) {
+  const NetworkLayout& layout = policy->layout();
+  RunningMeanStd norm = TrainedNormalizer(layout.obs_size);
+  const PolicySpec spec = SpecOf(layout_name);
+  const std::string path = TmpPath(file);
+  const absl::Status exported = ExportPolicy(policy, norm, spec, path);
+  ASSERT_TRUE(exported.ok()) << exported << "\n" << PolicyScriptSource(*policy);
+
+  const int n = 16;
+  const torch::Tensor raw = torch::randn({n, layout.obs_size}) * 3.0;
+  torch::Tensor expected;
+  {
+    torch::NoGradGuard no_grad;
+    expected = policy->forward(norm->Normalize(raw));
+  }
+  torch::jit::Module script = torch::jit::load(path);
+  const torch::Tensor scripted = script.forward({raw}).toTensor();
+  ASSERT_EQ(scripted.sizes(), expected.sizes());
+  EXPECT_LT((scripted - expected).abs().max().item<float>(), 1e-5);
+
+  auto checkpoint = PolicyCheckpoint::LoadFile(path);
+  ASSERT_TRUE(checkpoint.ok()) << checkpoint.status();
+  EXPECT_EQ((*checkpoint)->spec().ToJson(), spec.ToJson());
+  EXPECT_TRUE((*checkpoint)->spec().CheckCompatible(Spec(layout_name)).ok());
+  const torch::Tensor input = raw.contiguous();
+  std::vector<float> actions(static_cast<size_t>(n) * layout.action_size);
+  const absl::Status acted = (*checkpoint)->Act(input.data_ptr<float>(), n, actions.data());
+  ASSERT_TRUE(acted.ok()) << acted;
+  const torch::Tensor served = torch::from_blob(actions.data(), {n, layout.action_size}).clone();
+  EXPECT_LT((served - expected).abs().max().item<float>(), 1e-5);
+}
+
+// (6) The exported TorchScript computes the C++ policy's actions from raw observations.
+TEST(LearnerNetworksTest, ExportedTorchScriptMatchesTheModules) {
+  torch::manual_seed(7);
+  for (const std::string layout_name : {"5part", "3part", "1part"}) {
+    SCOPED_TRACE(layout_name);
+    ModSkillPolicy policy(Layout(layout_name), Config());
+    ExpectExportMatches(policy, layout_name, "learner_export_" + layout_name + ".pt");
+  }
+}
+
+TEST(LearnerNetworksTest, ExportRejectsAMismatchedSpec) {
+  ModSkillPolicy policy(Layout("5part"), Config());
+  RunningMeanStd norm(934);
+  const absl::Status status = ExportPolicy(policy, norm, SpecOf("5part"), TmpPath("unused.pt"));
+  EXPECT_TRUE(status.ok()) << status;
+  PolicySpec wrong = SpecOf("5part");
+  wrong.action_size = 68;
+  EXPECT_THAT(ExportPolicy(policy, norm, wrong, TmpPath("unused.pt")).message(), HasSubstr("action_size"));
+  RunningMeanStd small_norm(10);
+  EXPECT_THAT(ExportPolicy(policy, small_norm, SpecOf("5part"), TmpPath("unused.pt")).message(),
+              HasSubstr("obs_norm"));
+}
+
+// (7) The ablations: one whole-body controller; no attention.
+TEST(LearnerNetworksTest, AblationsBuildRunAndExport) {
+  torch::manual_seed(8);
+  const NetworkLayout layout = Layout("5part");
+  ModelConfig whole_body = Config();
+  whole_body.whole_body = true;
+  ModSkillPolicy whole(layout, whole_body);
+  ASSERT_EQ(whole->controllers().size(), 1u);
+  EXPECT_EQ(whole->controllers()[0]->input_size(), 5 * whole_body.embed_dim + layout.obs_size);
+  EXPECT_EQ(whole->controllers()[0]->action_size(), layout.action_size);
+  ExpectExportMatches(whole, "5part", "learner_export_whole_body.pt");
+
+  ModelConfig no_attention = Config();
+  no_attention.attention = false;
+  ModSkillPolicy plain(layout, no_attention);
+  ExpectExportMatches(plain, "5part", "learner_export_no_attention.pt");
+
+  ModelConfig both = whole_body;
+  both.attention = false;
+  ModSkillPolicy neither(layout, both);
+  ExpectExportMatches(neither, "5part", "learner_export_whole_body_no_attention.pt");
+}
+
+// (8) The AMP gradient penalty: positive in general, zero when the logit ignores its input.
+TEST(LearnerNetworksTest, GradientPenalty) {
+  torch::manual_seed(9);
+  const NetworkLayout layout = Layout("5part");
+  const ModelConfig config = Config();
+  AmpDiscriminator disc(layout.amp_obs_size, config.discriminator_hidden);
+  const torch::Tensor expert = torch::randn({8, layout.amp_obs_size});
+  EXPECT_EQ(disc->forward(expert).sizes(), (std::vector<int64_t>{8}));
+  const torch::Tensor penalty = disc->GradientPenalty(expert);
+  EXPECT_EQ(penalty.dim(), 0);
+  EXPECT_GT(penalty.item<float>(), 0.0f);
+  // It trains: its gradient reaches the first layer.
+  penalty.backward();
+  EXPECT_GT(disc->mlp()->layers()[0]->weight.grad().abs().sum().item<float>(), 0.0f);
+
+  {
+    torch::NoGradGuard no_grad;
+    disc->mlp()->output_layer()->weight.zero_();
+  }
+  EXPECT_EQ(disc->GradientPenalty(expert).item<float>(), 0.0f);
+}
+
+// (9) Bad layouts and unknown presets name the problem.
+TEST(LearnerNetworksTest, BadLayoutAndUnknownPreset) {
+  NetworkLayout overlapping = Layout("5part");
+  overlapping.parts[2].obs_start -= 3;
+  absl::Status status = overlapping.Validate();
+  EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(status.message(), HasSubstr("'Torso'"));
+  EXPECT_THAT(status.message(), HasSubstr("overlaps"));
+  EXPECT_THROW(ModSkillPolicy(overlapping, Config()), c10::Error);
+
+  NetworkLayout gap = Layout("5part");
+  gap.parts[4].action_start += 1;
+  EXPECT_THAT(gap.Validate().message(), HasSubstr("'R_Arm'"));
+  EXPECT_THAT(gap.Validate().message(), HasSubstr("action"));
+
+  NetworkLayout short_layout = Layout("5part");
+  short_layout.obs_size += 1;
+  EXPECT_THAT(short_layout.Validate().message(), HasSubstr("obs_size"));
+
+  NetworkLayout empty_part = Layout("5part");
+  empty_part.parts[0].action_size = 0;
+  EXPECT_THAT(empty_part.Validate().message(), HasSubstr("'L_Leg'"));
+
+  auto preset = ModelConfig::Preset("huge");
+  EXPECT_EQ(preset.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(preset.status().message(), HasSubstr("'huge'"));
+}
+
+}  // namespace
+}  // namespace modskill::learner

@@ -1,0 +1,207 @@
+// The learner end to end against in-process servers: training runs, checkpoints round-trip,
+// the exported policy runs in the server, a dead server does not stop training, and a run
+// with no server fails with a clear message.
+#include <filesystem>
+#include <fstream>
+
+#include <gmock/gmock.h>
+
+#include "absl/time/clock.h"
+#include "learner/evaluation.h"
+#include "learner/trainer.h"
+#include "server/core/atomic_file.h"
+#include "tests/server_fixture.h"
+
+namespace modskill::learner {
+namespace {
+
+using ::testing::HasSubstr;
+
+std::string RunDir(const std::string& name) {
+  const std::string dir = std::string(MODSKILL_TEST_TMP_DIR) + "/learner/" + name;
+  std::filesystem::remove_all(dir);
+  return dir;
+}
+
+TrainerConfig SmallConfig(const std::vector<int>& ports, const std::string& run_dir) {
+  TrainerConfig config = *TrainerConfig::ForPreset("small");
+  for (int port : ports) config.servers.push_back(absl::StrCat("127.0.0.1:", port));
+  config.envs_per_server = 16;
+  config.sessions_per_server = 2;
+  config.horizon = 8;
+  config.epochs = 2;
+  config.minibatch_size = 64;
+  config.amp_samples = 64;
+  config.discriminator_epochs = 1;
+  config.iterations = 2;
+  config.run_dir = run_dir;
+  config.checkpoint_every = 1;
+  config.server_timeout_s = 20;
+  return config;
+}
+
+TEST(LearnerTrainingTest, TrainsCheckpointsAndExportsAPolicyTheServerRuns) {
+  auto server = StartTestServer();
+  const std::string dir = RunDir("basic");
+  auto trainer = Trainer::Create(SmallConfig({server->port()}, dir));
+  ASSERT_TRUE(trainer.ok()) << trainer.status();
+  ASSERT_TRUE((*trainer)->Run().ok());
+  EXPECT_EQ((*trainer)->iteration(), 2);
+  EXPECT_EQ((*trainer)->env_steps(), 2 * 16 * 8);
+  const IterationStats& last = (*trainer)->history().back();
+  EXPECT_EQ(last.live_sessions, 2);
+  EXPECT_GT(last.mean_task_reward, 0.0);
+  EXPECT_TRUE(std::isfinite(last.policy_loss));
+  EXPECT_GT(last.discriminator_loss, 0.0);
+  EXPECT_TRUE(std::filesystem::exists(dir + "/checkpoint.pt"));
+  EXPECT_TRUE(std::filesystem::exists(dir + "/policy.pt"));
+  EXPECT_TRUE(std::filesystem::exists(dir + "/config.json"));
+
+  // The exported policy runs in the server, and evaluation reports the paper's metrics.
+  auto client = ConnectTo(*server);
+  auto report = Evaluate(*client, dir + "/policy.pt", *ReadFileToString(dir + "/policy.pt", 1 << 30),
+                         {"deepmimic_walk", "deepmimic_run"});
+  ASSERT_TRUE(report.ok()) << report.status();
+  ASSERT_EQ(report->clips.size(), 2u);
+  EXPECT_GT(report->g_mpjpe_mm, 0);
+  EXPECT_EQ(report->success_at_distance.size(), 7u);
+  EXPECT_EQ(report->part_names.size(), 5u);
+  EXPECT_THAT(report->ToMarkdown("test"), HasSubstr("| Method | Succ"));
+  for (size_t k = 1; k < report->success_at_distance.size(); ++k) {
+    EXPECT_LE(report->success_at_distance[k].second, report->success_at_distance[k - 1].second);
+  }
+  server->Shutdown(absl::Seconds(1));
+}
+
+TEST(LearnerTrainingTest, CheckpointRoundTripAndResume) {
+  auto server = StartTestServer();
+  const std::string dir = RunDir("resume");
+  TrainerConfig config = SmallConfig({server->port()}, dir);
+  auto first = Trainer::Create(config);
+  ASSERT_TRUE(first.ok());
+  ASSERT_TRUE((*first)->Run().ok());
+  const torch::Tensor probe = torch::randn({4, 934});
+  const torch::Tensor before = (*first)->policy()->forward((*first)->obs_norm()->Normalize(probe)).detach();
+
+  config.resume = true;
+  config.iterations = 1;
+  auto resumed = Trainer::Create(config);
+  ASSERT_TRUE(resumed.ok()) << resumed.status();
+  EXPECT_EQ((*resumed)->iteration(), 2);
+  EXPECT_EQ((*resumed)->env_steps(), (*first)->env_steps());
+  const torch::Tensor after = (*resumed)->policy()->forward((*resumed)->obs_norm()->Normalize(probe)).detach();
+  EXPECT_TRUE(torch::equal(before, after));
+  ASSERT_TRUE((*resumed)->Run().ok());
+  EXPECT_EQ((*resumed)->iteration(), 3);
+
+  // A damaged checkpoint is an error, not a crash; the good one is untouched.
+  const std::string damaged = dir + "/damaged.pt";
+  std::string bytes = *ReadFileToString(dir + "/checkpoint.pt", 1 << 30);
+  ASSERT_TRUE(WriteFileAtomically(damaged, bytes.substr(0, bytes.size() / 2)).ok());
+  absl::Status status = (*resumed)->LoadCheckpoint(damaged);
+  ASSERT_FALSE(status.ok());
+  EXPECT_THAT(std::string(status.message()), HasSubstr("damaged.pt"));
+  // A checkpoint from another layout does not load into this one.
+  TrainerConfig three = SmallConfig({server->port()}, RunDir("three"));
+  three.part_layout = "3part";
+  three.iterations = 1;
+  auto other = Trainer::Create(three);
+  ASSERT_TRUE(other.ok());
+  ASSERT_TRUE((*other)->Run().ok());
+  EXPECT_FALSE((*resumed)->LoadCheckpoint(RunDir("three") + "/checkpoint.pt").ok());
+  server->Shutdown(absl::Seconds(1));
+}
+
+TEST(LearnerTrainingTest, KillingOneOfTwoServersDoesNotStopTraining) {
+  auto a = StartTestServer();
+  ServerOptions options_b;
+  auto b = StartTestServer(options_b);
+  const int port_b = b->port();
+  TrainerConfig config = SmallConfig({a->port(), port_b}, RunDir("failover"));
+  config.iterations = 10;
+  auto trainer = Trainer::Create(config);
+  ASSERT_TRUE(trainer.ok()) << trainer.status();
+  std::vector<int> live;
+  std::unique_ptr<RunningServer> restarted;
+  absl::Status status = (*trainer)->Run([&](const IterationStats& stats) {
+    live.push_back(stats.live_sessions);
+    if (stats.iteration == 2) b->Shutdown(absl::ZeroDuration());  // server B dies
+    if (stats.iteration == 4) {
+      // ...and comes back on the same port.
+      ServerOptions again;
+      again.port = port_b;
+      auto started = StartServer(again, DefaultMotions());
+      ASSERT_TRUE(started.ok()) << started.status();
+      restarted = *std::move(started);
+    }
+    // Iterations as long as real ones, so that the retry backoff (1 s, 2 s, ...) comes due.
+    if (stats.iteration >= 4) absl::SleepFor(absl::Milliseconds(400));
+  });
+  ASSERT_TRUE(status.ok()) << status;
+  EXPECT_EQ((*trainer)->iteration(), 10);
+  ASSERT_EQ(live.size(), 10u);
+  EXPECT_EQ(live[0], 4);
+  EXPECT_EQ(live[1], 4);
+  EXPECT_EQ(live[3], 2) << "after B died only A's sessions take part";
+  EXPECT_EQ(live.back(), 4) << "B rejoins after it comes back";
+  a->Shutdown(absl::Seconds(1));
+  restarted->Shutdown(absl::Seconds(1));
+}
+
+TEST(LearnerTrainingTest, NoServerFailsWithAClearMessageAfterTheTimeout) {
+  TrainerConfig config = SmallConfig({1}, RunDir("noserver"));  // nothing listens on port 1
+  config.server_timeout_s = 1.5;
+  const absl::Time start = absl::Now();
+  auto trainer = Trainer::Create(config);
+  ASSERT_FALSE(trainer.ok());
+  EXPECT_EQ(trainer.status().code(), absl::StatusCode::kUnavailable);
+  EXPECT_THAT(std::string(trainer.status().message()), HasSubstr("no simulation server answered"));
+  EXPECT_THAT(std::string(trainer.status().message()), HasSubstr("127.0.0.1:1"));
+  EXPECT_LT(absl::Now() - start, absl::Seconds(15));
+}
+
+TEST(LearnerTrainingTest, BadConfigurationsAreClearErrors) {
+  TrainerConfig config = SmallConfig({1}, "");
+  auto no_dir = Trainer::Create(config);
+  ASSERT_FALSE(no_dir.ok());
+  EXPECT_THAT(std::string(no_dir.status().message()), HasSubstr("run_dir"));
+  config = SmallConfig({1}, "/proc/modskill-cannot-write-here");
+  auto unwritable = Trainer::Create(config);
+  ASSERT_FALSE(unwritable.ok());
+  EXPECT_THAT(std::string(unwritable.status().message()), HasSubstr("run_dir"));
+  config = SmallConfig({}, RunDir("x"));
+  EXPECT_THAT(std::string(Trainer::Create(config).status().message()), HasSubstr("servers"));
+  EXPECT_FALSE(TrainerConfig::ForPreset("huge").ok());
+}
+
+// A few iterations on one clip: the mean episode return rises (measured with this seed:
+// about 0.97 over the first three iterations, 1.25 over the last three; every env starts out
+// falling within two steps, and learning first buys it steps).
+TEST(LearnerTrainingTest, ReturnRisesOnASingleClip) {
+  auto server = StartTestServer();
+  TrainerConfig config = SmallConfig({server->port()}, RunDir("learn"));
+  config.motions = {"deepmimic_walk"};
+  config.envs_per_server = 64;
+  config.horizon = 16;
+  config.minibatch_size = 256;
+  config.epochs = 3;
+  config.iterations = 12;
+  config.learning_rate = 1e-4;
+  config.checkpoint_every = 100;
+  auto trainer = Trainer::Create(config);
+  ASSERT_TRUE(trainer.ok());
+  ASSERT_TRUE((*trainer)->Run().ok());
+  const auto& history = (*trainer)->history();
+  auto mean_return = [&](size_t begin, size_t end) {
+    double sum = 0;
+    for (size_t i = begin; i < end; ++i) sum += history[i].mean_episode_return;
+    return sum / (end - begin);
+  };
+  const size_t n = history.size();
+  EXPECT_GT(mean_return(n - 3, n), 1.1 * mean_return(0, 3))
+      << "first " << mean_return(0, 3) << " last " << mean_return(n - 3, n);
+  server->Shutdown(absl::Seconds(1));
+}
+
+}  // namespace
+}  // namespace modskill::learner
