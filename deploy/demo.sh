@@ -1,16 +1,19 @@
 #!/usr/bin/env bash
 # The main job: set up and build, start a simulation server on the shipped motion library,
-# then drive a batch of envs through it from the command-line client and print throughput.
-# Extra arguments go to `modskill-client simulate`.
+# train the small ModSkill preset against it for a few minutes (MODSKILL_TRAIN_MIN, default 5),
+# then evaluate the trained policy on every clip and print the table. The run (checkpoints,
+# exported policy.pt, progress.csv, TensorBoard events, eval.json/eval.md) lands in runs/demo.
+# Extra arguments go to modskill-learner (e.g. --motions deepmimic_walk).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 deploy/setup.sh
 BUILD="${MODSKILL_BUILD_DIR:-build}"
+RUN_DIR="${MODSKILL_RUN_DIR:-runs/demo}"
 PORT="${MODSKILL_PORT:-$(/usr/bin/python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')}"
-"$BUILD/server/modskill-server" --port "$PORT" --threads "$(nproc)" &
+"$BUILD/server/modskill-server" --port "$PORT" --threads 1 &
 SERVER_PID=$!
 trap 'kill -TERM $SERVER_PID 2>/dev/null; wait $SERVER_PID 2>/dev/null || true' EXIT
 "$BUILD/client/modskill-client" --server "127.0.0.1:$PORT" --timeout_s 20 describe
-"$BUILD/client/modskill-client" --server "127.0.0.1:$PORT" motions
-"$BUILD/client/modskill-client" --server "127.0.0.1:$PORT" simulate --envs 256 --steps 200 --actions random "$@"
-"$BUILD/client/modskill-client" --server "127.0.0.1:$PORT" stats
+"$BUILD/learner/modskill-learner" --servers "127.0.0.1:$PORT" --run_dir "$RUN_DIR" --preset small \
+    --iterations 100000 --time_budget_min "${MODSKILL_TRAIN_MIN:-5}" --envs_per_server 256 "$@"
+"$BUILD/learner/modskill-learner" --eval --checkpoint "$RUN_DIR/policy.pt" --servers "127.0.0.1:$PORT"

@@ -1,0 +1,159 @@
+// Learner throughput (issue: "samples/s of inference and of the PPO update for small and paper
+// presets", and "end-to-end steps/s of server + learner versus the server alone").
+//
+// 1. Networks alone, on random observations of the real env spec: inference (normalize,
+//    policy means, critic values; no gradients) and the PPO update (forward, losses, backward,
+//    Adam step) in samples per second, for the small and paper presets.
+// 2. End to end: an in-process server (2 threads) and the trainer (small preset, 256 envs in
+//    two sessions), against the same server driven by a learner-like loop with zero actions.
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "absl/flags/flag.h"
+#include "absl/flags/parse.h"
+#include "absl/strings/str_cat.h"
+#include "learner/critic.h"
+#include "learner/modskill_policy.h"
+#include "learner/ppo_loss.h"
+#include "learner/running_mean_std.h"
+#include "learner/trainer.h"
+#include "server/core/data_paths.h"
+#include "server/service/policy_checkpoint.h"
+#include "server/service/server_runner.h"
+
+ABSL_FLAG(int, repeats, 5, "timed repetitions per measurement (median reported)");
+ABSL_FLAG(int, iterations, 4, "trainer iterations for the end-to-end measurement");
+ABSL_FLAG(bool, paper, true, "also measure the paper preset");
+
+namespace modskill::learner {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double Median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+template <typename F>
+double SamplesPerSecond(int samples, int repeats, F&& work) {
+  work();  // warm up
+  std::vector<double> rates;
+  for (int r = 0; r < repeats; ++r) {
+    const auto start = Clock::now();
+    work();
+    rates.push_back(samples / std::chrono::duration<double>(Clock::now() - start).count());
+  }
+  return Median(rates);
+}
+
+void NetworkThroughput(const std::string& preset, const NetworkLayout& layout) {
+  ModelConfig config = *ModelConfig::Preset(preset);
+  ModSkillPolicy policy(layout, config);
+  Critic critic(layout.obs_size, config.critic_hidden);
+  RunningMeanStd norm(layout.obs_size);
+  std::vector<torch::Tensor> parameters = policy->parameters();
+  for (const auto& p : critic->parameters()) parameters.push_back(p);
+  torch::optim::Adam adam(parameters, torch::optim::AdamOptions(1e-4));
+  const int repeats = absl::GetFlag(FLAGS_repeats);
+  for (int batch : {256, 2048}) {
+    const torch::Tensor obs = torch::randn({batch, layout.obs_size});
+    const double inference = SamplesPerSecond(batch, repeats, [&] {
+      torch::NoGradGuard no_grad;
+      const torch::Tensor normalized = norm->Normalize(obs);
+      policy->forward(normalized).sum().item<float>();
+      critic->forward(normalized).sum().item<float>();
+    });
+    const torch::Tensor actions = torch::randn({batch, layout.action_size});
+    const torch::Tensor old_log_prob = torch::randn({batch}), advantages = torch::randn({batch});
+    const torch::Tensor old_values = torch::randn({batch}), returns = torch::randn({batch});
+    const double update = SamplesPerSecond(batch, repeats, [&] {
+      const torch::Tensor normalized = norm->Normalize(obs);
+      const torch::Tensor mean = policy->forward(normalized);
+      PpoLossTerms loss = ComputePpoLoss(ModSkillPolicyImpl::LogProb(mean, policy->log_std(), actions), old_log_prob,
+                                         advantages, critic->forward(normalized), old_values, returns, 0.2, 0.2, 2.0);
+      adam.zero_grad();
+      loss.total.backward();
+      adam.step();
+    });
+    std::printf("%-6s batch %5d: inference %9.0f samples/s   PPO update %9.0f samples/s\n", preset.c_str(), batch,
+                inference, update);
+    std::fflush(stdout);
+  }
+}
+
+int Run() {
+  SetTorchThreads(1);
+  auto spec = HumanoidSpec::LoadDefault();
+  auto humanoid = HumanoidModel::Create(*spec, PhysicsOptions());
+  auto catalog = PartLayoutCatalog::LoadDefault(*spec);
+  const NetworkLayout layout = LayoutFromEnvSpec(MakeEnvSpec(**humanoid, *catalog->Get("5part")));
+  std::printf("networks alone (1 torch thread, OpenBLAS when installed), medians of %d:\n", absl::GetFlag(FLAGS_repeats));
+  NetworkThroughput("small", layout);
+  if (absl::GetFlag(FLAGS_paper)) NetworkThroughput("paper", layout);
+
+  auto library = MotionLibrary::LoadDefault(*spec);
+  ServerOptions options;
+  options.port = 0;
+  options.service.threads_per_session = 1;  // two sessions of 128: one thread each, two cores
+  auto server = StartServer(options, std::make_shared<const MotionLibrary>(*std::move(library)));
+  if (!server.ok()) return std::fprintf(stderr, "error: %s\n", std::string(server.status().message()).c_str()), 1;
+  const std::string address = absl::StrCat("127.0.0.1:", (*server)->port());
+
+  // The server alone: two sessions of 128 envs stepped back to back with zero actions.
+  ClientOptions client_options;
+  client_options.server = address;
+  auto client = SimulationClient::Connect(client_options);
+  v1::SessionConfig session;
+  session.set_num_envs(128);
+  auto first = (*client)->OpenSession(session);
+  auto second = (*client)->OpenSession(session);
+  std::vector<float> zeros(128 * 69, 0.f);
+  const auto alone_start = Clock::now();
+  int64_t alone_steps = 0;
+  while (std::chrono::duration<double>(Clock::now() - alone_start).count() < 10) {
+    (void)(*first)->SendActions(zeros.data());
+    (void)(*second)->SendActions(zeros.data());
+    (void)(*first)->ReceiveResult();
+    (void)(*second)->ReceiveResult();
+    alone_steps += 256;
+  }
+  const double alone = alone_steps / std::chrono::duration<double>(Clock::now() - alone_start).count();
+  (void)(*first)->Close();
+  (void)(*second)->Close();
+
+  TrainerConfig config = *TrainerConfig::ForPreset("small");
+  config.servers = {address};
+  config.envs_per_server = 256;
+  config.sessions_per_server = 2;
+  config.iterations = absl::GetFlag(FLAGS_iterations);
+  config.run_dir = "/tmp/modskill-learner-bench";
+  config.checkpoint_every = 1000;
+  auto trainer = Trainer::Create(config);
+  if (!trainer.ok()) return std::fprintf(stderr, "error: %s\n", std::string(trainer.status().message()).c_str()), 1;
+  std::vector<double> rates, collect, update;
+  (void)(*trainer)->Run([&](const IterationStats& s) {
+    rates.push_back(s.env_steps_per_second);
+    collect.push_back(s.collect_seconds);
+    update.push_back(s.update_seconds);
+  });
+  std::printf("\nend to end, 256 envs (2 sessions of 128, 1 server thread each), small preset, %d iterations of %d steps:\n",
+              config.iterations, 256 * config.horizon);
+  std::printf("  server alone (zero actions over gRPC):  %7.0f env steps/s\n", alone);
+  std::printf("  server + learner (collect + update):    %7.0f env steps/s  (%.2f x server alone)\n", Median(rates),
+              Median(rates) / alone);
+  std::printf("  per iteration: collect %.2f s, update %.2f s (medians)\n", Median(collect), Median(update));
+  (*server)->Shutdown(absl::Seconds(1));
+  return 0;
+}
+
+}  // namespace
+}  // namespace modskill::learner
+
+int main(int argc, char** argv) {
+  absl::ParseCommandLine(argc, argv);
+  return modskill::learner::Run();
+}
