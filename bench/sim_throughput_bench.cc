@@ -17,6 +17,7 @@
 #include "server/core/data_paths.h"
 #include "server/core/env_batch.h"
 #include "server/core/humanoid_state.h"
+#include "server/core/reference_actions.h"
 
 ABSL_FLAG(int, repeats, 5, "measurements per configuration (median reported)");
 ABSL_FLAG(double, seconds, 1.5, "seconds per measurement");
@@ -31,23 +32,6 @@ using Clock = std::chrono::steady_clock;
 double Median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   return v.empty() ? 0 : v[v.size() / 2];
-}
-
-// Open-loop reference actions: PD targets at the reference's next frame.
-void ReferenceActions(const EnvBatch& batch, std::vector<float>* actions) {
-  const EnvSpec& spec = batch.spec();
-  const HumanoidModel& humanoid = batch.humanoid();
-  const BatchBuffers& out = batch.buffers();
-  for (int i = 0; i < batch.num_envs(); ++i) {
-    const MotionClip& clip = batch.motions().clip(out.clip_id[i]);
-    const int frame = std::min(out.frame[i] + 1, clip.num_frames - 1);
-    for (int a = 0; a < spec.action_size; ++a) {
-      const int h = spec.action_hinge[a];
-      const double target = clip.dof_pos[frame * clip.num_hinges() + h];
-      (*actions)[i * spec.action_size + a] = static_cast<float>(
-          std::clamp((target - humanoid.action_offset()[h]) / humanoid.action_scale()[h], -1.0, 1.0));
-    }
-  }
 }
 
 // mj_step calls per second, timing nothing but mj_step.
@@ -84,7 +68,7 @@ double BatchStepRate(EnvBatch* batch, double seconds) {
   double stepping = 0;
   int64_t env_steps = 0;
   while (stepping < seconds) {
-    ReferenceActions(*batch, &actions);
+    actions = ReferenceActions(*batch);
     const auto start = Clock::now();
     const absl::Status status = batch->Step(actions);
     stepping += std::chrono::duration<double>(Clock::now() - start).count();

@@ -1,0 +1,55 @@
+#!/usr/bin/env python3
+"""Plots a training run's learning curve from its progress.csv.
+
+modskill-learner writes one row per iteration to RUN_DIR/progress.csv (and the same scalars
+as TensorBoard events). This draws mean episode return, mean per-step task reward and mean
+episode length against environment steps, one line per run, to a PNG.
+
+    /usr/bin/python3 plot_learning_curve.py runs/walk/progress.csv runs/library/progress.csv --out curve.png
+"""
+import argparse
+import csv
+import os
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+
+def read(path):
+    with open(path, newline="") as f:
+        rows = list(csv.DictReader(f))
+    if not rows:
+        raise SystemExit(f"error: {path}: no rows")
+    return {key: [float(row[key]) for row in rows] for key in rows[0]}
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("csv", nargs="+", help="progress.csv files")
+    parser.add_argument("--labels", nargs="*", help="one label per file (default: the run directory's name)")
+    parser.add_argument("--out", required=True, help="PNG to write")
+    args = parser.parse_args()
+    labels = args.labels or [os.path.basename(os.path.dirname(os.path.abspath(p))) for p in args.csv]
+    if len(labels) != len(args.csv):
+        raise SystemExit("error: --labels needs one label per file")
+    figure, axes = plt.subplots(1, 3, figsize=(15, 4))
+    for path, label in zip(args.csv, labels):
+        run = read(path)
+        steps = [s / 1e6 for s in run["env_steps"]]
+        axes[0].plot(steps, run["episode_return"], label=label)
+        axes[1].plot(steps, run["mean_task_reward"], label=label)
+        axes[2].plot(steps, run["episode_length"], label=label)
+    for axis, title in zip(axes, ["mean episode return", "mean task reward per step", "mean episode length (steps)"]):
+        axis.set_title(title)
+        axis.set_xlabel("env steps (millions)")
+        axis.grid(alpha=0.3)
+        axis.legend()
+    figure.tight_layout()
+    figure.savefig(args.out, dpi=100)
+    print(f"wrote {args.out}")
+
+
+if __name__ == "__main__":
+    main()
