@@ -77,7 +77,7 @@ HoldResult Hold(const HumanoidModel& humanoid, const MotionLibrary& motions, con
     for (int b = 1; b < humanoid.num_bodies(); ++b) {
       const int p = humanoid.spec().body(b).parent;
       const double* a = &targets[3 * (b - 1)];
-      rot[b] = rot[p] * QuatFromIntrinsicXyz(a[0], a[1], a[2]);
+      rot[b] = rot[p] * HingeRotation(a[0], a[1], a[2]);
       pos[b] = pos[p] + rot[p] * humanoid.spec().body(b).offset;
       body += (sim.body_pos[b] - pos[b]).norm();
     }

@@ -273,6 +273,7 @@ absl::StatusOr<IterationStats> Trainer::Iterate() {
           lengths[i] = 0;
         }
       }
+      RecordEpisodeEnds(r.slot, result);
       const torch::Tensor next = ToTorch(result.obs(), {r.n, O});
       if (t + 1 < T) {
         if (absl::Status status = act(r, t + 1, next); !status.ok()) fail(r, status);
@@ -433,6 +434,7 @@ absl::StatusOr<IterationStats> Trainer::Iterate() {
 
   ++iteration_;
   env_steps_ += static_cast<int64_t>(samples);
+  if (config_.report_every > 0 && iteration_ % config_.report_every == 0) ReportFailures();
   stats.iteration = iteration_;
   stats.env_steps = env_steps_;
   stats.update_seconds = std::chrono::duration<double>(Clock::now() - update_start).count();
@@ -458,6 +460,62 @@ absl::StatusOr<IterationStats> Trainer::Iterate() {
   }
   stats.live_sessions = static_cast<int>(usable.size());
   return stats;
+}
+
+void Trainer::RecordEpisodeEnds(SessionSlot* slot, const v1::StepResult& result) {
+  const int n = slot->num_envs();
+  const std::string& done = result.done().data();
+  const std::string& truncated = result.truncated().data();
+  if (done.size() != static_cast<size_t>(n) || truncated.size() != static_cast<size_t>(n)) return;
+  std::vector<int32_t> clip(n), frame(n);
+  std::memcpy(clip.data(), result.ended_clip_id().data().data(), sizeof(int32_t) * n);
+  std::memcpy(frame.data(), result.ended_frame().data().data(), sizeof(int32_t) * n);
+  const int parts = result.part_error().shape_size() == 2 ? static_cast<int>(result.part_error().shape(1)) : 0;
+  std::vector<float> part_error(static_cast<size_t>(n) * parts);
+  if (parts > 0) std::memcpy(part_error.data(), result.part_error().data().data(), sizeof(float) * part_error.size());
+  PendingReports& pending = pending_reports_[slot];
+  if (pending.generation != slot->generation) pending = PendingReports{slot->generation, {}};
+  const auto& names = slot->stream->opened().clip_names();
+  for (int i = 0; i < n; ++i) {
+    if (!done[i] || clip[i] < 0 || clip[i] >= names.size()) continue;
+    v1::ClipFailure failure;
+    failure.set_clip(names[clip[i]]);
+    failure.set_frame(frame[i]);
+    failure.set_terminated(!truncated[i]);
+    bool finite = true;
+    for (int p = 0; p < parts; ++p) finite &= std::isfinite(part_error[i * parts + p]);
+    if (failure.terminated() && finite) {
+      for (int p = 0; p < parts; ++p) failure.add_part_errors(part_error[i * parts + p]);
+    }
+    auto& outcome = clip_outcomes_[failure.clip()];
+    (failure.terminated() ? outcome.first : outcome.second) += 1;
+    pending.failures.push_back(std::move(failure));
+  }
+}
+
+void Trainer::ReportFailures() {
+  for (SessionSlot* slot : servers_->Alive()) {
+    PendingReports& pending = pending_reports_[slot];
+    if (pending.generation != slot->generation || pending.failures.empty()) continue;
+    v1::ReportFailuresRequest request;
+    request.set_session_id(slot->stream->opened().session_id());
+    for (v1::ClipFailure& failure : pending.failures) *request.add_failures() = std::move(failure);
+    pending.failures.clear();
+    auto state = slot->client->ReportFailures(request);
+    if (!state.ok()) LogLine("failure report to %s not taken: %s", slot->server, state.status().message());
+  }
+  // The hardest clips so far: highest failure rate among those seen at least 5 times.
+  std::vector<std::pair<double, std::string>> rates;
+  for (const auto& [clip, outcome] : clip_outcomes_) {
+    const int64_t total = outcome.first + outcome.second;
+    if (total >= 5) rates.emplace_back(static_cast<double>(outcome.first) / total, clip);
+  }
+  std::sort(rates.rbegin(), rates.rend());
+  std::string hardest;
+  for (size_t k = 0; k < std::min<size_t>(5, rates.size()); ++k) {
+    absl::StrAppend(&hardest, k ? ", " : "", rates[k].second, " ", static_cast<int>(100 * rates[k].first), "%");
+  }
+  if (!hardest.empty()) LogLine("hardest clips (episodes failed): %s", hardest);
 }
 
 absl::Status Trainer::SaveCheckpoint(const std::string& path) {

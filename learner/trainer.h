@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -67,6 +68,10 @@ class Trainer {
   absl::Status WaitForServers();
   absl::Status BuildNetworks(const v1::EnvSpec& spec);
   absl::StatusOr<IterationStats> Iterate();
+  // Notes how the episodes that ended in `result` went, for the session's failure report.
+  void RecordEpisodeEnds(SessionSlot* slot, const v1::StepResult& result);
+  // Sends each live session its failure list and logs the hardest clips.
+  void ReportFailures();
 
   TrainerConfig config_;
   std::unique_ptr<ServerPool> servers_;
@@ -87,6 +92,14 @@ class Trainer {
   std::vector<std::vector<int>> episode_length_;
   std::vector<double> recent_returns_, recent_lengths_;
   torch::Generator generator_;
+  // Failure lists not yet reported, per session (keyed by slot and its session generation).
+  struct PendingReports {
+    int64_t generation = -1;
+    std::vector<v1::ClipFailure> failures;
+  };
+  std::map<SessionSlot*, PendingReports> pending_reports_;
+  // Per clip over the whole run: failures and successes, for the log of hardest clips.
+  std::map<std::string, std::pair<int64_t, int64_t>> clip_outcomes_;
 };
 
 }  // namespace modskill::learner

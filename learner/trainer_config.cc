@@ -41,6 +41,7 @@ absl::Status TrainerConfig::Validate() const {
   if (amp_samples < 1) return bad("amp_samples", amp_samples, "must be >= 1");
   if (task_reward_weight < 0 || amp_reward_weight < 0) return absl::InvalidArgumentError("reward weights must be >= 0");
   if (run_dir.empty()) return absl::InvalidArgumentError("--run_dir: required");
+  if (report_every < 0) return bad("report_every", report_every, "must be >= 0");
   if (checkpoint_every < 1) return bad("checkpoint_every", checkpoint_every, "must be >= 1");
   if (!(server_timeout_s > 0)) return bad("server_timeout_s", server_timeout_s, "must be > 0");
   return absl::OkStatus();
@@ -70,6 +71,7 @@ std::string TrainerConfig::ToJson() const {
   json["discriminator_learning_rate"] = discriminator_learning_rate;
   json["gradient_penalty_weight"] = gradient_penalty_weight;
   json["seed"] = seed;
+  json["report_every"] = report_every;
   return json.dump(1);
 }
 

@@ -43,6 +43,7 @@ struct TrainerConfig {
   int discriminator_epochs = 2;
   int amp_samples = 2048;  // expert and policy samples per discriminator epoch
   uint64_t seed = 1;
+  int report_every = 5;  // iterations between failure reports to the servers' samplers; 0: never
 
   // Where results go.
   std::string run_dir;

@@ -191,7 +191,7 @@ TEST(PdControllerTest, HoldsReferencePosesForOneSecond) {
     double body_error = 0;
     for (int b = 1; b < 24; ++b) {
       const int p = DefaultSpec().body(b).parent;
-      rot[b] = rot[p] * QuatFromIntrinsicXyz(targets[3 * (b - 1)], targets[3 * (b - 1) + 1], targets[3 * (b - 1) + 2]);
+      rot[b] = rot[p] * HingeRotation(targets[3 * (b - 1)], targets[3 * (b - 1) + 1], targets[3 * (b - 1) + 2]);
       pos[b] = pos[p] + rot[p] * DefaultSpec().body(b).offset;
       body_error += (state.body_pos[b] - pos[b]).norm() / 23;
     }

@@ -43,7 +43,9 @@ TrainerConfig SmallConfig(const std::vector<int>& ports, const std::string& run_
 TEST(LearnerTrainingTest, TrainsCheckpointsAndExportsAPolicyTheServerRuns) {
   auto server = StartTestServer();
   const std::string dir = RunDir("basic");
-  auto trainer = Trainer::Create(SmallConfig({server->port()}, dir));
+  TrainerConfig config = SmallConfig({server->port()}, dir);
+  config.report_every = 1;
+  auto trainer = Trainer::Create(config);
   ASSERT_TRUE(trainer.ok()) << trainer.status();
   ASSERT_TRUE((*trainer)->Run().ok());
   EXPECT_EQ((*trainer)->iteration(), 2);
@@ -57,8 +59,14 @@ TEST(LearnerTrainingTest, TrainsCheckpointsAndExportsAPolicyTheServerRuns) {
   EXPECT_TRUE(std::filesystem::exists(dir + "/policy.pt"));
   EXPECT_TRUE(std::filesystem::exists(dir + "/config.json"));
 
-  // The exported policy runs in the server, and evaluation reports the paper's metrics.
+  // Every episode that ended was reported to the session's sampler, failures and successes.
   auto client = ConnectTo(*server);
+  auto stats = client->GetStats();
+  ASSERT_TRUE(stats.ok());
+  EXPECT_GT(stats->failure_reports(), 0);
+  EXPECT_EQ(stats->failure_reports(), stats->episodes());
+
+  // The exported policy runs in the server, and evaluation reports the paper's metrics.
   auto report = Evaluate(*client, dir + "/policy.pt", *ReadFileToString(dir + "/policy.pt", 1 << 30),
                          {"deepmimic_walk", "deepmimic_run"});
   ASSERT_TRUE(report.ok()) << report.status();

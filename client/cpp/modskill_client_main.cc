@@ -61,7 +61,7 @@ constexpr char kUsage[] = R"(usage: modskill-client <command> [flags] [args]
 commands:
   describe [--part_layout 5part]   the env spec: sizes, control dt, layouts, one line per body part
   motions                          the server's motion library, one line per clip
-  stats                            server totals and one line per live session
+  stats                            server totals, live sessions and their 5 most sampled clips
   add-motions FILE...              upload clips (.npz .bvh .txt .msclip) to the server's library
   rollout --checkpoint F [--clip NAME...] [--out F.json] [--upload] [--frames]
                                    evaluate a TorchScript policy on clips (default: every clip)
@@ -254,6 +254,32 @@ int Stats(SimulationClient& client) {
                 s.session_id().c_str(), static_cast<int>(peer_width), s.peer().c_str(), s.num_envs(),
                 static_cast<long long>(s.steps()), s.steps_per_second(), static_cast<long long>(s.episodes()),
                 static_cast<long long>(s.physics_resets()), static_cast<long long>(s.failure_reports()));
+  }
+  // The adaptive sampler: the clips each session draws most often.
+  constexpr int kTopClips = 5;
+  for (const v1::SessionStats& s : stats->sessions()) {
+    if (s.clips_size() == 0) continue;
+    std::vector<int> order(s.clips_size());
+    for (int c = 0; c < s.clips_size(); ++c) order[c] = c;
+    const size_t shown = std::min<size_t>(kTopClips, order.size());
+    // Highest probability first; ties (uniform sampling) keep the session's clip order.
+    std::partial_sort(order.begin(), order.begin() + shown, order.end(), [&](int a, int b) {
+      const double pa = s.clips(a).probability(), pb = s.clips(b).probability();
+      return pa != pb ? pa > pb : a < b;
+    });
+    std::vector<const v1::ClipSamplingState*> clips;
+    for (size_t c = 0; c < shown; ++c) clips.push_back(&s.clips(order[c]));
+    size_t name_width = 4;
+    for (size_t c = 0; c < shown; ++c) name_width = std::max(name_width, clips[c]->clip().size());
+    std::printf("session %s: top %zu of %d clips by sampling probability (uniform %.4f):\n", s.session_id().c_str(),
+                shown, s.clips_size(), 1.0 / s.clips_size());
+    std::printf("  %-*s  %11s  %10s  %9s  %9s\n", static_cast<int>(name_width), "clip", "probability", "weight",
+                "failures", "successes");
+    for (size_t c = 0; c < shown; ++c) {
+      std::printf("  %-*s  %11.4f  %10.4g  %9lld  %9lld\n", static_cast<int>(name_width), clips[c]->clip().c_str(),
+                  clips[c]->probability(), clips[c]->weight(), static_cast<long long>(clips[c]->failures()),
+                  static_cast<long long>(clips[c]->successes()));
+    }
   }
   return 0;
 }

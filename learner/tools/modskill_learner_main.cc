@@ -44,6 +44,7 @@ ABSL_FLAG(double, log_std, 0, "fixed log standard deviation of the Gaussian poli
 ABSL_FLAG(double, amp_reward_weight, 0.5, "weight of the AMP style reward (task: 1 - this)");
 ABSL_FLAG(uint64_t, seed, 1, "random seed");
 ABSL_FLAG(int, checkpoint_every, 10, "iterations between checkpoints");
+ABSL_FLAG(int, report_every, 5, "iterations between failure reports to the servers' samplers (0: never)");
 ABSL_FLAG(bool, resume, false, "continue the run in --run_dir from its checkpoint");
 ABSL_FLAG(double, server_timeout_s, 120, "exit when no server answers for this long");
 ABSL_FLAG(int, threads, 1, "torch threads for inference and updates (the servers need the other cores)");
@@ -121,6 +122,7 @@ int RunTraining(const std::string& token) {
   config->task_reward_weight = 1 - amp_weight;
   config->seed = absl::GetFlag(FLAGS_seed);
   config->checkpoint_every = absl::GetFlag(FLAGS_checkpoint_every);
+  config->report_every = absl::GetFlag(FLAGS_report_every);
   config->resume = absl::GetFlag(FLAGS_resume);
   config->server_timeout_s = absl::GetFlag(FLAGS_server_timeout_s);
   if (absl::Status status = config->Validate(); !status.ok()) return Fail(std::string(status.message()), 2);

@@ -24,6 +24,8 @@ struct BatchBuffers {
   std::vector<int32_t> ended_frame;    // [N] frame at which it ended
   std::vector<float> max_body_error;   // [N] m, before any reset
   std::vector<float> mean_body_error;  // [N] m
+  int num_parts = 0;
+  std::vector<float> part_error;       // [N, num_parts] mean body distance per part (layout order), m, before any reset
 
   void Allocate(const EnvSpec& spec, int envs) {
     num_envs = envs;
@@ -39,6 +41,8 @@ struct BatchBuffers {
     ended_frame.assign(envs, -1);
     max_body_error.assign(envs, 0.f);
     mean_body_error.assign(envs, 0.f);
+    num_parts = spec.layout.num_parts();
+    part_error.assign(static_cast<size_t>(envs) * num_parts, 0.f);
   }
 };
 

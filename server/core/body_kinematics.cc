@@ -13,14 +13,14 @@ void ComputeBodyKinematics(const HumanoidSpec& spec, const RootState& root, cons
     const int p = spec.body(b).parent;
     const double* angle = dof_pos + 3 * (b - 1);
     const double* rate = dof_vel + 3 * (b - 1);
-    const Quat rx(Eigen::AngleAxisd(angle[0], Vec3::UnitX()));
-    const Quat ry(Eigen::AngleAxisd(angle[1], Vec3::UnitY()));
-    const Quat rz(Eigen::AngleAxisd(angle[2], Vec3::UnitZ()));
+    const Quat r0(Eigen::AngleAxisd(angle[0], HingeAxis(0)));
+    const Quat r1(Eigen::AngleAxisd(angle[1], HingeAxis(1)));
+    const Quat r2(Eigen::AngleAxisd(angle[2], HingeAxis(2)));
     const Vec3 offset = body_rot[p] * spec.body(b).offset;
     body_pos[b] = body_pos[p] + offset;
-    body_rot[b] = body_rot[p] * (rx * ry * rz);
-    // Hinge rates about the x axis, the y axis after x, the z axis after x and y.
-    const Vec3 relative = rate[0] * Vec3::UnitX() + rx * (rate[1] * Vec3::UnitY() + ry * (rate[2] * Vec3::UnitZ()));
+    body_rot[b] = body_rot[p] * (r0 * r1 * r2);
+    // Each hinge's rate about its axis as moved by the hinges before it.
+    const Vec3 relative = rate[0] * HingeAxis(0) + r0 * (rate[1] * HingeAxis(1) + r1 * (rate[2] * HingeAxis(2)));
     body_ang_vel[b] = body_ang_vel[p] + body_rot[p] * relative;
     body_vel[b] = body_vel[p] + body_ang_vel[p].cross(offset);
   }

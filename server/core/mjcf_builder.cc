@@ -37,7 +37,9 @@ void AppendBody(const HumanoidSpec& spec, const PhysicsOptions& options, int ind
   if (index == 0) {
     if (!options.fixed_root) absl::StrAppend(xml, indent, "  <freejoint name=\"", body.name, "\"/>\n");
   } else {
-    const char* axes[3] = {"1 0 0", "0 1 0", "0 0 1"};
+    // PHC's hinge names and ranges belong to its y-up frame: _x, _y, _z turn about z-up +y, +z, +x
+    // (HingeAxis in rotation_math.h).
+    const char* axes[3] = {"0 1 0", "0 0 1", "1 0 0"};
     const char* suffix[3] = {"_x", "_y", "_z"};
     // Stable PD computes its own damping; the implicit mode lets MuJoCo integrate kd.
     const double damping = options.pd_mode == PdMode::kPositionImplicitDamping ? body.kd : 0.0;

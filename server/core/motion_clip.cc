@@ -85,7 +85,7 @@ absl::Status ComputeClipKinematics(const HumanoidSpec& spec, MotionClip* clip) {
   clip->dof_vel.assign(frames * hinges, 0.0);
   for (int f = 0; f < frames; ++f) {
     for (int b = 1; b < bodies; ++b) {
-      const Vec3 angles = IntrinsicXyzFromQuat(clip->local(f, b));
+      const Vec3 angles = HingeAngles(clip->local(f, b));
       for (int a = 0; a < 3; ++a) clip->dof_pos[f * hinges + 3 * (b - 1) + a] = angles[a];
     }
   }

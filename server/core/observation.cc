@@ -59,7 +59,7 @@ void WriteAmpFrame(const EnvSpec& spec, const HumanoidState& state, float* out) 
   const int bodies = static_cast<int>(state.body_rot.size());
   for (int b = 1; b < bodies; ++b) {
     const double* angle = &state.dof_pos[3 * (b - 1)];
-    WriteTanNorm(QuatFromIntrinsicXyz(angle[0], angle[1], angle[2]), out);
+    WriteTanNorm(HingeRotation(angle[0], angle[1], angle[2]), out);
     out += 6;
   }
   for (double v : state.dof_vel) *out++ = static_cast<float>(v);

@@ -63,8 +63,7 @@ inline Vec3 AngularVelocity(const Quat& q0, const Quat& q1, double dt) {
   return RotationVector(q1 * q0.conjugate()) / dt;
 }
 
-// MuJoCo composes the three hinges of a body (axes x, y, z in the body frame) as
-// R = Rx(a) * Ry(b) * Rz(c): intrinsic x-y-z Euler angles.
+// Intrinsic x-y-z Euler angles: R = Rx(a) * Ry(b) * Rz(c).
 inline Quat QuatFromIntrinsicXyz(double a, double b, double c) {
   return Quat(Eigen::AngleAxisd(a, Vec3::UnitX())) * Quat(Eigen::AngleAxisd(b, Vec3::UnitY())) *
          Quat(Eigen::AngleAxisd(c, Vec3::UnitZ()));
@@ -83,6 +82,29 @@ inline Vec3 IntrinsicXyzFromQuat(const Quat& q) {
     c = 0.0;
   }
   return Vec3(a, b, c);
+}
+
+// The hinges of a body. Each non-root body has three, named _x, _y, _z after PHC's y-up frame,
+// whose ranges they keep (the knee bends about PHC's x). In the z-up simulation frame those axes
+// are +y, +z and +x. MuJoCo composes them in that order: R = R(y, a) * R(z, b) * R(x, c).
+// Equivalently R = P * XYZ(a, b, c) * P^T with P the y-up -> z-up map, so the first angle
+// (the knee's flexion) has the full range of an intrinsic x-y-z decomposition.
+inline Vec3 HingeAxis(int k) {
+  static const Vec3 kAxes[3] = {Vec3::UnitY(), Vec3::UnitZ(), Vec3::UnitX()};
+  return kAxes[k];
+}
+
+inline Quat HingeRotation(double a, double b, double c) {
+  return Quat(Eigen::AngleAxisd(a, HingeAxis(0))) * Quat(Eigen::AngleAxisd(b, HingeAxis(1))) *
+         Quat(Eigen::AngleAxisd(c, HingeAxis(2)));
+}
+
+// Inverse of HingeRotation (the middle angle in [-pi/2, pi/2]).
+inline Vec3 HingeAngles(const Quat& q) {
+  // P^T q P expresses q in the y-up frame, where the hinges are x, y, z.
+  const Quat p_conj(0.5, -0.5, -0.5, -0.5);  // P = rotation (x,y,z) -> (z,x,y) is quat (0.5, 0.5, 0.5, 0.5)
+  const Quat p(0.5, 0.5, 0.5, 0.5);
+  return IntrinsicXyzFromQuat(p_conj * q.normalized() * p);
 }
 
 // Shortest rotation taking direction `from` onto direction `to`.

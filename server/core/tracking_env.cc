@@ -98,6 +98,8 @@ void TrackingEnv::Step(const float* action, EnvRow row) {
     out.ended_frame[i] = frame_;
     out.max_body_error[i] = std::numeric_limits<float>::infinity();
     out.mean_body_error[i] = std::numeric_limits<float>::infinity();
+    float* part_error = &out.part_error[static_cast<size_t>(i) * out.num_parts];
+    std::fill(part_error, part_error + out.num_parts, std::numeric_limits<float>::infinity());
     EndEpisode(row);
     return;
   }
@@ -110,6 +112,7 @@ void TrackingEnv::Step(const float* action, EnvRow row) {
   out.reward[i] = reward;
   out.max_body_error[i] = static_cast<float>(errors.max_body_distance);
   out.mean_body_error[i] = static_cast<float>(errors.mean_body_distance);
+  WritePartErrors(&out.part_error[static_cast<size_t>(i) * out.num_parts]);
 
   bool terminated = false;
   switch (config.termination) {
@@ -138,6 +141,16 @@ void TrackingEnv::Step(const float* action, EnvRow row) {
   amp_head_ = (amp_head_ + kAmpHistory - 1) % kAmpHistory;
   WriteAmpFrame(spec, sim_, &amp_history_[static_cast<size_t>(amp_head_) * per_frame]);
   WriteObservation(row);
+}
+
+void TrackingEnv::WritePartErrors(float* part_error) const {
+  // sim_ and reference_ hold this step's states (CurrentTrackingTerms just read them).
+  const std::vector<BodyPart>& parts = context_->spec->layout.parts;
+  for (size_t p = 0; p < parts.size(); ++p) {
+    double total = 0;
+    for (int b : parts[p].bodies) total += (reference_.body_pos[b] - sim_.body_pos[b]).norm();
+    part_error[p] = parts[p].bodies.empty() ? 0.f : static_cast<float>(total / parts[p].bodies.size());
+  }
 }
 
 void TrackingEnv::EndEpisode(EnvRow row) {

@@ -85,6 +85,8 @@ class TrackingEnv {
  private:
   void WriteObservation(EnvRow row);
   void EndEpisode(EnvRow row);
+  // Mean body distance per part of the layout between sim_ and reference_ (one float per part).
+  void WritePartErrors(float* part_error) const;
   bool PhysicsDiverged() const;
 
   const EnvContext* context_;

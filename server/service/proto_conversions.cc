@@ -90,6 +90,7 @@ void FillStepResult(const EnvBatch& batch, int64_t step, int amp_frames, v1::Ste
   SetInt32Tensor({n}, b.ended_frame.data(), out->mutable_ended_frame());
   SetFloatTensor({n}, b.max_body_error.data(), out->mutable_max_body_error());
   SetFloatTensor({n}, b.mean_body_error.data(), out->mutable_mean_body_error());
+  SetFloatTensor({n, b.num_parts}, b.part_error.data(), out->mutable_part_error());
 }
 
 grpc::Status ToGrpcStatus(const absl::Status& status) {

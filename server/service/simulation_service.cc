@@ -49,11 +49,33 @@ absl::StatusOr<double> ToTerminationDistance(float distance, TerminationMode mod
   return mode == TerminationMode::kEvaluation ? 0.5 : 0.25;
 }
 
+// One entry per clip of the session: what the ledger recorded and what the sampler makes of it
+// (`probabilities` = session.adaptive_sampler.Weights(), the floor applied).
+void FillClipSamplingStates(const SimulationSession& session, const std::vector<double>& probabilities,
+                            google::protobuf::RepeatedPtrField<v1::ClipSamplingState>* out)
+    ABSL_EXCLUSIVE_LOCKS_REQUIRED(session.mutex) {
+  const std::vector<double>& weights = session.adaptive_sampler.raw_weights();
+  for (size_t c = 0; c < session.clip_names.size(); ++c) {
+    const ClipFailureRecord& record = session.ledger.clips()[c];
+    v1::ClipSamplingState* clip = out->Add();
+    clip->set_clip(session.clip_names[c]);
+    clip->set_weight(weights[c]);
+    clip->set_probability(probabilities[c]);
+    clip->set_failures(record.failures);
+    clip->set_successes(record.successes);
+    clip->set_last_failed_frame(record.last_failed_frame);
+    for (double e : record.mean_part_errors) clip->add_mean_part_errors(static_cast<float>(e));
+  }
+}
+
 }  // namespace
 
 absl::StatusOr<std::unique_ptr<SimulationService>> SimulationService::Create(
     const ServiceOptions& options, std::shared_ptr<const MotionLibrary> motions) {
   if (motions == nullptr || motions->size() == 0) return absl::InvalidArgumentError("motions: the library is empty");
+  if (absl::Status status = ValidateSamplingParameters(options.sampling_floor, kDefaultSamplingDecay); !status.ok()) {
+    return status;
+  }
   std::unique_ptr<SimulationService> service(new SimulationService(options, motions));
   auto spec = HumanoidSpec::LoadDefault();
   if (!spec.ok()) return spec.status();
@@ -150,7 +172,8 @@ grpc::Status SimulationService::Simulate(grpc::ServerContext* context,
   }
   std::vector<std::string> clip_names;
   for (int c = 0; c < motions->size(); ++c) clip_names.push_back(motions->clip(c).name);
-  auto session = std::make_shared<SimulationSession>(*session_id, context->peer(), *std::move(batch), clip_names);
+  auto session = std::make_shared<SimulationSession>(*session_id, context->peer(), *std::move(batch), clip_names,
+                                                     options_.sampling, options_.sampling_floor);
   registry_.Register(session);
   EnvBatch& envs = *session->batch;
   LogLine("session %s opened by %s: %d envs, %d clips, layout %s", session->id, session->peer, envs.num_envs(),
@@ -169,6 +192,7 @@ grpc::Status SimulationService::Simulate(grpc::ServerContext* context,
   }
   grpc::Status result = grpc::Status::OK;
   std::vector<float> actions;
+  std::vector<double> clip_weights;  // swapped with the session's pending weights, so reused
   const int64_t n = envs.num_envs(), action_size = envs.spec().action_size;
   const char* ending = "client closed the stream";
   if (!stream->Write(response)) {
@@ -183,6 +207,14 @@ grpc::Status SimulationService::Simulate(grpc::ServerContext* context,
       if (absl::Status status = ReadFloatTensor(request.actions(), "actions", {n, action_size}, &actions); !status.ok()) {
         result = ToGrpcStatus(status);
         break;
+      }
+      // New sampling weights from ReportFailures take effect here, between two steps: this
+      // thread alone steps the batch, so no env is drawing a clip meanwhile.
+      if (session->TakePendingWeights(&clip_weights)) {
+        if (absl::Status status = envs.SetClipWeights(clip_weights); !status.ok()) {
+          result = Error(grpc::StatusCode::INTERNAL, absl::StrCat("sampler: ", status.message()));
+          break;
+        }
       }
       if (absl::Status status = envs.Step(actions); !status.ok()) {
         result = ToGrpcStatus(status);
@@ -240,22 +272,16 @@ grpc::Status SimulationService::ReportFailures(grpc::ServerContext* context, con
   for (int c = 0; c < motions.size(); ++c) frames.push_back(motions.clip(c).num_frames);
   absl::MutexLock lock(&session->mutex);
   if (absl::Status status = session->ledger.Record(reports, frames); !status.ok()) return ToGrpcStatus(status);
+  for (const FailureLedger::Report& report : reports) {
+    session->adaptive_sampler.Observe(report.clip, /*failed=*/report.terminated);
+  }
+  std::vector<double> probabilities = session->adaptive_sampler.Weights();
+  session->SetPendingWeights(probabilities);
   session->failure_reports += request->failures_size();
   registry_.AddFailureReports(request->failures_size());
   response->set_session_id(session->id);
   response->set_reports(session->ledger.reports());
-  const ClipSampler& sampler = session->batch->sampler();
-  for (int c = 0; c < motions.size(); ++c) {
-    const ClipFailureRecord& record = session->ledger.clips()[c];
-    v1::ClipSamplingState* clip = response->add_clips();
-    clip->set_clip(motions.clip(c).name);
-    clip->set_weight(sampler.weights()[c]);
-    clip->set_probability(sampler.Probability(c));
-    clip->set_failures(record.failures);
-    clip->set_successes(record.successes);
-    clip->set_last_failed_frame(record.last_failed_frame);
-    for (double e : record.mean_part_errors) clip->add_mean_part_errors(static_cast<float>(e));
-  }
+  FillClipSamplingStates(*session, probabilities, response->mutable_clips());
   return grpc::Status::OK;
 }
 
@@ -454,6 +480,8 @@ grpc::Status SimulationService::GetStats(grpc::ServerContext* context, const v1:
     stats->set_episodes(session->episodes);
     stats->set_physics_resets(session->physics_resets);
     stats->set_failure_reports(session->failure_reports);
+    absl::MutexLock lock(&session->mutex);
+    FillClipSamplingStates(*session, session->adaptive_sampler.Weights(), stats->mutable_clips());
   }
   return grpc::Status::OK;
 }

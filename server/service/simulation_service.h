@@ -7,6 +7,7 @@
 #include <string>
 
 #include "modskill/v1/modskill.grpc.pb.h"
+#include "server/core/adaptive_sampler.h"
 #include "server/core/env_batch.h"
 #include "server/service/motion_store.h"
 #include "server/service/session_registry.h"
@@ -20,6 +21,10 @@ struct ServiceOptions {
   int64_t max_upload_bytes = int64_t{64} << 20;
   std::string auth_token;  // empty: no authentication
   PhysicsOptions physics;
+  // Active skill learning: how each session's clip sampler follows ReportFailures (kUniform: the
+  // no-adaptive ablation), and the probability floor: every clip keeps >= sampling_floor / N.
+  SamplingScheme sampling = SamplingScheme::kFailureCount;
+  double sampling_floor = kDefaultSamplingFloor;  // in [0, 1]
 };
 
 class SimulationService final : public v1::Simulation::Service {

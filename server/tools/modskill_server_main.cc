@@ -10,6 +10,7 @@
 #include "absl/flags/parse.h"
 #include "absl/flags/usage.h"
 #include "absl/strings/ascii.h"
+#include "server/core/adaptive_sampler.h"
 #include "server/core/atomic_file.h"
 #include "server/core/data_paths.h"
 #include "server/service/policy_checkpoint.h"
@@ -28,6 +29,12 @@ ABSL_FLAG(std::string, auth_token_file, "", "file holding a token; every call th
 ABSL_FLAG(std::string, tls_cert, "", "PEM certificate chain (with --tls_key: serve TLS)");
 ABSL_FLAG(std::string, tls_key, "", "PEM private key");
 ABSL_FLAG(std::string, pd_mode, "position_implicit", "position_implicit or stable_pd");
+ABSL_FLAG(std::string, sampling, "failure_count",
+          "how sessions pick clips from ReportFailures: failure_count (PHC: probability ~ recent failures), "
+          "decay_on_success (ProtoMotions: weight x0.999 per success, 1 per failure) or uniform");
+ABSL_FLAG(bool, no_adaptive, false, "ablation: uniform clip sampling whatever --sampling says");
+ABSL_FLAG(double, sampling_floor, modskill::kDefaultSamplingFloor,
+          "share of the probability spread uniformly: every clip keeps >= sampling_floor / clips (0 .. 1)");
 
 int main(int argc, char** argv) {
   absl::SetProgramUsageMessage("serves humanoid simulation sessions over gRPC");
@@ -54,6 +61,15 @@ int main(int argc, char** argv) {
   auto pd_mode = ParsePdMode(absl::GetFlag(FLAGS_pd_mode));
   if (!pd_mode.ok()) return fail(std::string(pd_mode.status().message()));
   options.service.physics.pd_mode = *pd_mode;
+  auto sampling = ParseSamplingScheme(absl::GetFlag(FLAGS_sampling));
+  if (!sampling.ok()) return fail(absl::StrCat("--", sampling.status().message()));
+  options.service.sampling = absl::GetFlag(FLAGS_no_adaptive) ? SamplingScheme::kUniform : *sampling;
+  options.service.sampling_floor = absl::GetFlag(FLAGS_sampling_floor);
+  if (absl::Status status = ValidateSamplingParameters(options.service.sampling_floor, kDefaultSamplingDecay,
+                                                       "--sampling_floor");
+      !status.ok()) {
+    return fail(std::string(status.message()));
+  }
   if (!absl::GetFlag(FLAGS_auth_token_file).empty()) {
     auto token = ReadFileToString(absl::GetFlag(FLAGS_auth_token_file), 4096);
     if (!token.ok()) return fail(absl::StrCat("--auth_token_file: ", token.status().message()));
@@ -78,10 +94,12 @@ int main(int argc, char** argv) {
   const int num_clips = library->size();
   auto server = StartServer(options, std::make_shared<const MotionLibrary>(*std::move(library)));
   if (!server.ok()) return fail(std::string(server.status().message()));
-  LogLine("modskill-server listening on %s:%d (%s%s), %d clips from %s, %d threads per session", options.bind,
-          (*server)->port(), options.tls_cert_file.empty() ? "insecure" : "TLS",
+  LogLine("modskill-server listening on %s:%d (%s%s), %d clips from %s, %d threads per session, %s sampling "
+          "(floor %g)",
+          options.bind, (*server)->port(), options.tls_cert_file.empty() ? "insecure" : "TLS",
           options.service.auth_token.empty() ? "" : ", token auth", num_clips, motion_dir,
-          options.service.threads_per_session);
+          options.service.threads_per_session, SamplingSchemeName(options.service.sampling),
+          options.service.sampling_floor);
   std::fflush(stderr);
   int signal_number = 0;
   sigwait(&signals, &signal_number);
