@@ -1,6 +1,8 @@
 #include "server/core/humanoid_spec.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <fstream>
 #include <mutex>
 #include <sstream>
@@ -86,6 +88,25 @@ double GeomSpec::Volume() const {
       return M_PI * radius * radius * ((to - from).norm() + 4.0 / 3.0 * radius);
     case Type::kBox:
       return 8.0 * half_extents.x() * half_extents.y() * half_extents.z();
+  }
+  return 0;
+}
+
+double GeomSpec::LowestPoint(const Vec3& pos, const Quat& rot) const {
+  switch (type) {
+    case Type::kSphere:
+      return (pos + rot * center).z() - radius;
+    case Type::kCapsule:
+      return std::min((pos + rot * from).z(), (pos + rot * to).z()) - radius;
+    case Type::kBox: {
+      double lowest = std::numeric_limits<double>::infinity();
+      for (int corner = 0; corner < 8; ++corner) {
+        const Vec3 c(corner & 1 ? half_extents.x() : -half_extents.x(), corner & 2 ? half_extents.y() : -half_extents.y(),
+                     corner & 4 ? half_extents.z() : -half_extents.z());
+        lowest = std::min(lowest, (pos + rot * (center + c)).z());
+      }
+      return lowest;
+    }
   }
   return 0;
 }

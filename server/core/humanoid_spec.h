@@ -25,6 +25,8 @@ struct GeomSpec {
   double density = 1000;            // kg/m^3
 
   double Volume() const;
+  // Lowest z of this geometry on a body placed at (pos, rot).
+  double LowestPoint(const Vec3& pos, const Quat& rot) const;
   double Mass() const { return Volume() * density; }
 };
 

@@ -14,27 +14,6 @@ namespace {
 
 bool Finite(const Vec3& v) { return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z()); }
 
-// Lowest z of one body's geometry placed at (pos, rot).
-double GeomBottom(const GeomSpec& g, const Vec3& pos, const Quat& rot) {
-  switch (g.type) {
-    case GeomSpec::Type::kSphere:
-      return (pos + rot * g.center).z() - g.radius;
-    case GeomSpec::Type::kCapsule:
-      return std::min((pos + rot * g.from).z(), (pos + rot * g.to).z()) - g.radius;
-    case GeomSpec::Type::kBox: {
-      double lowest = std::numeric_limits<double>::infinity();
-      for (int corner = 0; corner < 8; ++corner) {
-        const Vec3 c(corner & 1 ? g.half_extents.x() : -g.half_extents.x(),
-                     corner & 2 ? g.half_extents.y() : -g.half_extents.y(),
-                     corner & 4 ? g.half_extents.z() : -g.half_extents.z());
-        lowest = std::min(lowest, (pos + rot * (g.center + c)).z());
-      }
-      return lowest;
-    }
-  }
-  return 0;
-}
-
 }  // namespace
 
 absl::Status ValidateClip(const MotionClip& clip) {
@@ -138,7 +117,7 @@ double LowestGeomPoint(const HumanoidSpec& spec, const MotionClip& clip, int fra
   double lowest = std::numeric_limits<double>::infinity();
   for (int b = 0; b < clip.num_bodies; ++b) {
     const int i = frame * clip.num_bodies + b;
-    lowest = std::min(lowest, GeomBottom(spec.body(b).geom, clip.body_pos[i], clip.body_rot[i]));
+    lowest = std::min(lowest, spec.body(b).geom.LowestPoint(clip.body_pos[i], clip.body_rot[i]));
   }
   return lowest;
 }
@@ -170,7 +149,7 @@ double FootContactRatio(const HumanoidSpec& spec, const MotionClip& clip, double
   for (int f = 0; f < clip.num_frames; ++f) {
     for (int b : feet) {
       const int i = f * clip.num_bodies + b;
-      if (GeomBottom(spec.body(b).geom, clip.body_pos[i], clip.body_rot[i]) < threshold) {
+      if (spec.body(b).geom.LowestPoint(clip.body_pos[i], clip.body_rot[i]) < threshold) {
         ++in_contact;
         break;
       }

@@ -12,27 +12,6 @@
 namespace modskill {
 namespace {
 
-// Lowest z of one body's geometry placed at (pos, rot); the per-body form of LowestGeomPoint.
-double GeomBottom(const GeomSpec& g, const Vec3& pos, const Quat& rot) {
-  switch (g.type) {
-    case GeomSpec::Type::kSphere:
-      return (pos + rot * g.center).z() - g.radius;
-    case GeomSpec::Type::kCapsule:
-      return std::min((pos + rot * g.from).z(), (pos + rot * g.to).z()) - g.radius;
-    case GeomSpec::Type::kBox: {
-      double lowest = std::numeric_limits<double>::infinity();
-      for (int corner = 0; corner < 8; ++corner) {
-        const Vec3 c(corner & 1 ? g.half_extents.x() : -g.half_extents.x(),
-                     corner & 2 ? g.half_extents.y() : -g.half_extents.y(),
-                     corner & 4 ? g.half_extents.z() : -g.half_extents.z());
-        lowest = std::min(lowest, (pos + rot * (g.center + c)).z());
-      }
-      return lowest;
-    }
-  }
-  return 0;
-}
-
 PlausibilityVerdict Reject(std::string reason) { return PlausibilityVerdict{false, std::move(reason)}; }
 
 std::optional<PlausibilityVerdict> CheckJointLimits(const HumanoidSpec& spec, const MotionClip& clip, double slack) {
@@ -66,7 +45,7 @@ std::optional<PlausibilityVerdict> CheckPenetration(const HumanoidSpec& spec, co
   for (int f = 0; f < clip.num_frames; ++f) {
     for (int b = 0; b < clip.num_bodies; ++b) {
       const int i = f * clip.num_bodies + b;
-      const double bottom = GeomBottom(spec.body(b).geom, clip.body_pos[i], clip.body_rot[i]);
+      const double bottom = spec.body(b).geom.LowestPoint(clip.body_pos[i], clip.body_rot[i]);
       if (bottom < lowest || !std::isfinite(bottom)) {
         lowest = std::isfinite(bottom) ? bottom : -std::numeric_limits<double>::infinity();
         lowest_frame = f;
@@ -108,7 +87,7 @@ std::optional<PlausibilityVerdict> CheckFootSkate(const HumanoidSpec& spec, cons
     double fastest = -1;
     for (int f = 0; f < clip.num_frames; ++f) {
       const int i = f * clip.num_bodies + b;
-      if (GeomBottom(spec.body(b).geom, clip.body_pos[i], clip.body_rot[i]) >= kFootContactHeight) continue;
+      if (spec.body(b).geom.LowestPoint(clip.body_pos[i], clip.body_rot[i]) >= kFootContactHeight) continue;
       const double speed = clip.body_vel[i].head<2>().norm();
       speeds.push_back(speed);
       if (speed > fastest) {
@@ -161,7 +140,7 @@ std::vector<int> FootBodies(const HumanoidSpec& spec) {
 
 double BodyGeomBottom(const HumanoidSpec& spec, const MotionClip& clip, int frame, int body) {
   const int i = frame * clip.num_bodies + body;
-  return GeomBottom(spec.body(body).geom, clip.body_pos[i], clip.body_rot[i]);
+  return spec.body(body).geom.LowestPoint(clip.body_pos[i], clip.body_rot[i]);
 }
 
 PlausibilityVerdict CheckPlausibility(const HumanoidSpec& spec, const MotionClip& clip,
