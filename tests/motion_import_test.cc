@@ -28,6 +28,7 @@
 #include "server/core/motion_clip.h"
 #include "server/core/rotation_math.h"
 #include "tests/npz_test_writer.h"
+#include "tests/test_files.h"
 
 namespace modskill {
 namespace {
@@ -41,23 +42,7 @@ const std::string kCmuBvh = std::string(MODSKILL_REPO_DIR) + "/data/motions/sour
 const std::string kDeepMimicWalk =
     std::string(MODSKILL_REPO_DIR) + "/data/motions/source/deepmimic/humanoid3d_walk.txt";
 
-// ctest runs each test in its own process, possibly in parallel: every test gets its own files.
-std::string TempPath(const std::string& file_name) {
-  const std::filesystem::path directory =
-      std::filesystem::path(MODSKILL_TEST_TMP_DIR) / "motion_import_test";
-  std::filesystem::create_directories(directory);
-  const ::testing::TestInfo* test = ::testing::UnitTest::GetInstance()->current_test_info();
-  const std::string test_name =
-      absl::StrReplaceAll(absl::StrCat(test->test_suite_name(), ".", test->name()), {{"/", "_"}});
-  return (directory / absl::StrCat(test_name, ".", file_name)).string();
-}
-
-void WriteBytes(const std::string& path, const std::string& bytes) {
-  std::ofstream file(path, std::ios::binary | std::ios::trunc);
-  file.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-  file.close();
-  ASSERT_FALSE(file.fail()) << path;
-}
+std::string TempPath(const std::string& file_name) { return TestTempPath("motion_import_test", file_name); }
 
 std::string ReadBytes(const std::string& path) {
   std::ifstream file(path, std::ios::binary);

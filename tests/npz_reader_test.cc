@@ -16,6 +16,7 @@
 #include "absl/strings/str_replace.h"
 #include "gtest/gtest.h"
 #include "tests/npz_test_writer.h"
+#include "tests/test_files.h"
 
 namespace modskill {
 namespace {
@@ -24,23 +25,7 @@ using NpzWriter = ::modskill::testing::NpzWriter;
 using Shape = std::vector<int64_t>;
 using Values = std::vector<double>;
 
-// ctest runs each test in its own process, possibly in parallel, so every test gets its own
-// file names.
-std::string TempPath(const std::string& file_name) {
-  const std::filesystem::path directory =
-      std::filesystem::path(MODSKILL_TEST_TMP_DIR) / "npz_reader_test";
-  std::filesystem::create_directories(directory);
-  const ::testing::TestInfo* test = ::testing::UnitTest::GetInstance()->current_test_info();
-  const std::string test_name =
-      absl::StrReplaceAll(absl::StrCat(test->test_suite_name(), ".", test->name()), {{"/", "_"}});
-  return (directory / absl::StrCat(test_name, ".", file_name)).string();
-}
-
-void WriteBytes(const std::string& path, const std::string& bytes) {
-  std::ofstream file(path, std::ios::binary | std::ios::trunc);
-  file.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-  ASSERT_TRUE(file.good()) << path;
-}
+std::string TempPath(const std::string& file_name) { return TestTempPath("npz_reader_test", file_name); }
 
 std::string ToBytes(const std::vector<float>& values) {
   std::string bytes(values.size() * sizeof(float), '\0');
