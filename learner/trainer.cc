@@ -475,11 +475,12 @@ void Trainer::RecordEpisodeEnds(SessionSlot* slot, const v1::StepResult& result)
   if (parts > 0) std::memcpy(part_error.data(), result.part_error().data().data(), sizeof(float) * part_error.size());
   PendingReports& pending = pending_reports_[slot];
   if (pending.generation != slot->generation) pending = PendingReports{slot->generation, {}};
-  const auto& names = slot->stream->opened().clip_names();
   for (int i = 0; i < n; ++i) {
-    if (!done[i] || clip[i] < 0 || clip[i] >= names.size()) continue;
+    if (!done[i]) continue;
+    const std::string& name = slot->stream->clip_name(clip[i]);
+    if (name.empty()) continue;
     v1::ClipFailure failure;
-    failure.set_clip(names[clip[i]]);
+    failure.set_clip(name);
     failure.set_frame(frame[i]);
     failure.set_terminated(!truncated[i]);
     bool finite = true;

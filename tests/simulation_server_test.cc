@@ -71,6 +71,8 @@ class SimulationServerTest : public ::testing::Test {
     options.service.max_sessions = 3;
     options.service.max_envs_per_session = 64;
     options.service.max_upload_bytes = 1 << 20;
+    // Generative resampling has its own tests (generative_resampling_test.cc); here clip sets stay fixed.
+    options.service.generation.enabled = false;
     server_ = StartTestServer(options);
     ASSERT_NE(server_, nullptr);
     client_ = ConnectTo(*server_);

@@ -280,6 +280,24 @@ int Stats(SimulationClient& client) {
                   clips[c]->probability(), clips[c]->weight(), static_cast<long long>(clips[c]->failures()),
                   static_cast<long long>(clips[c]->successes()));
     }
+    const v1::GenerationStats& g = s.generation();
+    if (!g.enabled()) {
+      std::printf("  generative resampling off\n");
+      continue;
+    }
+    std::string rejects;
+    for (const auto& [check, count] : g.rejected_by_check()) {
+      absl::StrAppend(&rejects, rejects.empty() ? " (" : ", ", check, " ", count);
+    }
+    if (!rejects.empty()) rejects += ")";
+    std::printf("  generated clips: %d live, %lld made in %lld rounds, %lld rejected%s, %lld evicted\n",
+                g.live_generated_clips(), static_cast<long long>(g.generated()), static_cast<long long>(g.requests()),
+                static_cast<long long>(g.rejected()), rejects.c_str(), static_cast<long long>(g.evicted()));
+    if (g.generator_errors() > 0) {
+      std::printf("  external generator: %lld errors (%lld built-in fallbacks), last: %s\n",
+                  static_cast<long long>(g.generator_errors()), static_cast<long long>(g.builtin_fallbacks()),
+                  g.last_generator_error().c_str());
+    }
   }
   return 0;
 }

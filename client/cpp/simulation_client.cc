@@ -159,6 +159,8 @@ absl::StatusOr<std::unique_ptr<SimulationStream>> SimulationClient::OpenSession(
   if (!stream->stream_->Read(&response)) return stream->Fail("Simulate");
   if (!response.has_opened()) return absl::InternalError(absl::StrCat(options_.server, " Simulate: no SessionOpened reply"));
   stream->opened_ = std::move(*response.mutable_opened());
+  stream->clip_names_.assign(stream->opened_.clip_names().begin(), stream->opened_.clip_names().end());
+  stream->live_clips_ = stream->opened_.clip_names_size();
   stream->num_envs_ = config.num_envs();
   stream->action_size_ = stream->opened_.spec().action_size();
   return stream;
@@ -198,7 +200,21 @@ absl::Status SimulationStream::ReceiveResult() {
   if (!stream_->Read(&response_)) return Fail("Simulate");
   if (!response_.has_step()) return absl::InternalError(absl::StrCat(server_, " Simulate: expected a step result"));
   last_response_bytes_ = response_.ByteSizeLong();
+  if (response_.step().has_motion_set_update()) {
+    const v1::MotionSetUpdate& update = response_.step().motion_set_update();
+    for (const v1::SessionClip& clip : update.added()) {
+      if (clip.clip_id() < 0 || clip.clip_id() > (1 << 24)) continue;  // not an id a server hands out
+      if (clip.clip_id() >= static_cast<int>(clip_names_.size())) clip_names_.resize(clip.clip_id() + 1);
+      clip_names_[clip.clip_id()] = clip.name();
+    }
+    live_clips_ += update.added_size() - update.removed_clip_ids_size();
+  }
   return absl::OkStatus();
+}
+
+const std::string& SimulationStream::clip_name(int id) const {
+  static const std::string kUnknown;
+  return id >= 0 && id < static_cast<int>(clip_names_.size()) ? clip_names_[id] : kUnknown;
 }
 
 absl::Status SimulationStream::Step(const float* actions) {

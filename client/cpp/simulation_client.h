@@ -41,6 +41,11 @@ class SimulationStream {
   absl::Status SendActions(const float* actions);
   absl::Status ReceiveResult();
   const v1::StepResult& result() const { return response_.step(); }
+  // The name of a clip id of this session (StepResult.clip_id, ended_clip_id), following the
+  // motion set's updates (generated clips joining); empty for an id never announced.
+  const std::string& clip_name(int id) const;
+  // Ids the session's motion set holds now (original clips and live generated ones).
+  int live_clips() const { return live_clips_; }
   // Half-closes the stream and returns the server's final status.
   absl::Status Close();
   // Drops the stream at once, as a crashed client would.
@@ -61,6 +66,8 @@ class SimulationStream {
   v1::SimulateResponse response_;
   int num_envs_ = 0;
   int action_size_ = 0;
+  std::vector<std::string> clip_names_;  // by id, removed ones kept (ended episodes still name them)
+  int live_clips_ = 0;
   bool closed_ = false;
   size_t last_request_bytes_ = 0;
   size_t last_response_bytes_ = 0;

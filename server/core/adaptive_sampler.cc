@@ -61,6 +61,23 @@ void AdaptiveSampler::Observe(int clip, bool failed) {
   }
 }
 
+void AdaptiveSampler::Remap(const std::vector<int>& previous, double new_clip_count) {
+  const double fresh_count = std::isfinite(new_clip_count) ? std::max(new_clip_count, 0.0) : 0.0;
+  std::vector<double> counts(previous.size()), weights(previous.size());
+  for (size_t c = 0; c < previous.size(); ++c) {
+    const int old = previous[c];
+    if (old >= 0 && old < num_clips()) {
+      counts[c] = counts_[old];
+      weights[c] = weights_[old];
+      continue;
+    }
+    counts[c] = scheme_ == SamplingScheme::kFailureCount ? fresh_count : 0.0;
+    weights[c] = scheme_ == SamplingScheme::kFailureCount ? fresh_count + kFailureCountEpsilon : 1.0;
+  }
+  counts_ = std::move(counts);
+  weights_ = std::move(weights);
+}
+
 std::vector<double> AdaptiveSampler::Weights() const {
   const int n = num_clips();
   std::vector<double> p(n, n > 0 ? 1.0 / n : 0.0);

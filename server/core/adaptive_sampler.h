@@ -61,6 +61,12 @@ class AdaptiveSampler {
   // in [0, num_clips) (the caller has validated it); others are ignored.
   void Observe(int clip, bool failed);
 
+  // The clip list changed (generative resampling): new clip c was old clip previous[c] and keeps
+  // its count and weight, or is new (-1) and starts as a never-failed clip would, except that
+  // `new_clip_count` failures are credited to it (kFailureCount; kDecayOnSuccess: weight 1), so
+  // that a variant of a failing clip is drawn about as often as its parent from the start.
+  void Remap(const std::vector<int>& previous, double new_clip_count = 0.0);
+
   // Normalized probabilities with the floor applied (sum 1). With q_c = w_c / Σ w the scheme's
   // distribution and f = floor_fraction / N:
   //     p_c = max(f, λ q_c),   λ ∈ [0, 1] the unique value with Σ_c p_c = 1,

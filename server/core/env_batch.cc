@@ -114,6 +114,29 @@ absl::Status EnvBatch::Step(absl::Span<const float> actions) {
   return absl::OkStatus();
 }
 
+absl::Status EnvBatch::SetMotions(std::shared_ptr<const MotionLibrary> motions, std::vector<int> clip_ids,
+                                  std::shared_ptr<const ReferenceAmpFrames> reference_amp,
+                                  absl::Span<const double> weights) {
+  if (motions == nullptr || motions->size() == 0) return absl::InvalidArgumentError("motions: the library is empty");
+  if (reference_amp == nullptr) return absl::InvalidArgumentError("reference_amp: missing");
+  if (!clip_ids.empty() && static_cast<int>(clip_ids.size()) != motions->size()) {
+    return absl::InvalidArgumentError(absl::StrCat("clip_ids: ", clip_ids.size(), " ids for ", motions->size(), " clips"));
+  }
+  for (int c = 0; c < motions->size(); ++c) {
+    if (motions->clip(c).num_bodies != humanoid().num_bodies() || motions->clip(c).num_frames < 2) {
+      return absl::InvalidArgumentError(absl::StrCat("motions: clip '", motions->clip(c).name,
+                                                     "' does not fit the humanoid or has < 2 frames"));
+    }
+  }
+  ClipSampler sampler(motions->size());
+  if (absl::Status status = sampler.SetWeights(weights); !status.ok()) return status;
+  sampler_ = std::move(sampler);
+  context_.motions = std::move(motions);
+  context_.clip_ids = std::move(clip_ids);
+  context_.reference_amp = std::move(reference_amp);
+  return absl::OkStatus();
+}
+
 int64_t EnvBatch::physics_resets() const {
   int64_t total = 0;
   for (const auto& env : envs_) total += env->physics_resets();

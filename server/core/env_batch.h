@@ -46,13 +46,22 @@ class EnvBatch {
   absl::Status Step(absl::Span<const float> actions);
 
   absl::Status SetClipWeights(absl::Span<const double> weights) { return sampler_.SetWeights(weights); }
+  // Replaces the clips new episodes draw from (call between steps, never during one): the
+  // library, the id each library clip is reported as (see EnvContext::clip_ids), the reference
+  // AMP frames computed from that library and one sampling weight per clip. Episodes in progress
+  // finish on the clip they started with. Errors leave the batch unchanged.
+  absl::Status SetMotions(std::shared_ptr<const MotionLibrary> motions, std::vector<int> clip_ids,
+                          std::shared_ptr<const ReferenceAmpFrames> reference_amp, absl::Span<const double> weights);
   const ClipSampler& sampler() const { return sampler_; }
 
   const BatchBuffers& buffers() const { return buffers_; }
   const EnvSpec& spec() const { return *context_.spec; }
   const HumanoidModel& humanoid() const { return *context_.humanoid; }
   const MotionLibrary& motions() const { return *context_.motions; }
+  std::shared_ptr<const MotionLibrary> shared_motions() const { return context_.motions; }
   const ReferenceAmpFrames& reference_amp() const { return *context_.reference_amp; }
+  std::shared_ptr<const ReferenceAmpFrames> shared_reference_amp() const { return context_.reference_amp; }
+  const std::vector<int>& clip_ids() const { return context_.clip_ids; }
   int num_envs() const { return static_cast<int>(envs_.size()); }
   int num_threads() const { return pool_->num_threads(); }
   TrackingEnv& env(int i) { return *envs_[i]; }

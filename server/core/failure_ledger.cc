@@ -51,4 +51,16 @@ absl::Status FailureLedger::Record(absl::Span<const Report> reports, absl::Span<
   return absl::OkStatus();
 }
 
+void FailureLedger::Remap(absl::Span<const int> previous) {
+  std::vector<ClipFailureRecord> remapped(previous.size());
+  for (size_t c = 0; c < previous.size(); ++c) {
+    if (previous[c] >= 0 && previous[c] < static_cast<int>(clips_.size())) {
+      remapped[c] = std::move(clips_[previous[c]]);
+    } else {
+      remapped[c].mean_part_errors.assign(num_parts_, 0.0);
+    }
+  }
+  clips_ = std::move(remapped);
+}
+
 }  // namespace modskill

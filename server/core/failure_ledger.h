@@ -33,6 +33,10 @@ class FailureLedger {
   // 100 m) before recording any; the message names the report index and field.
   absl::Status Record(absl::Span<const Report> reports, absl::Span<const int> clip_frames);
 
+  // The clip list changed (generative resampling): new clip c was old clip previous[c], or is
+  // new (-1) and starts with an empty record. Clips not named in `previous` are forgotten.
+  void Remap(absl::Span<const int> previous);
+
   const std::vector<ClipFailureRecord>& clips() const { return clips_; }
   int64_t reports() const { return reports_; }
   int num_parts() const { return num_parts_; }

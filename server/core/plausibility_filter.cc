@@ -14,28 +14,38 @@ namespace {
 
 PlausibilityVerdict Reject(std::string reason) { return PlausibilityVerdict{false, std::move(reason)}; }
 
-std::optional<PlausibilityVerdict> CheckJointLimits(const HumanoidSpec& spec, const MotionClip& clip, double slack) {
+double HingeViolation(const HumanoidSpec& spec, const MotionClip& clip, int frame, int hinge) {
+  const BodySpec& body = spec.body(1 + hinge / 3);
+  const double angle = clip.dof_pos[frame * clip.num_hinges() + hinge];
+  if (!std::isfinite(angle)) return std::numeric_limits<double>::infinity();
+  return std::max(body.range_low[hinge % 3] - angle, angle - body.range_high[hinge % 3]);
+}
+
+// slack[h]: how far hinge h may leave its range.
+std::optional<PlausibilityVerdict> CheckJointLimits(const HumanoidSpec& spec, const MotionClip& clip,
+                                                    const std::vector<double>& slack) {
   const int hinges = clip.num_hinges();
-  double worst = slack;
+  double worst = 0, worst_slack = 0;
   int worst_frame = -1, worst_hinge = -1;
   for (int f = 0; f < clip.num_frames; ++f) {
     for (int h = 0; h < hinges; ++h) {
-      const BodySpec& body = spec.body(1 + h / 3);
-      const double angle = clip.dof_pos[f * hinges + h];
-      const double violation = std::max(body.range_low[h % 3] - angle, angle - body.range_high[h % 3]);
-      if (violation > worst || !std::isfinite(angle)) {
-        worst = std::isfinite(angle) ? violation : std::numeric_limits<double>::infinity();
+      const double excess = HingeViolation(spec, clip, f, h) - slack[h];
+      if (excess > worst || std::isnan(excess)) {
+        worst = std::isnan(excess) ? std::numeric_limits<double>::infinity() : excess;
+        worst_slack = slack[h];
         worst_frame = f;
         worst_hinge = h;
       }
     }
   }
   if (worst_hinge < 0) return std::nullopt;
+  const double slack_used = worst_slack;
+  worst += slack_used;
   const BodySpec& body = spec.body(1 + worst_hinge / 3);
   const int axis = worst_hinge % 3;
   return Reject(absl::StrFormat("joint_limit: %s_%c = %.3f rad outside [%.3f, %.3f] by %.3f rad (> %.3f) at frame %d",
                                 body.name, "xyz"[axis], clip.dof_pos[worst_frame * hinges + worst_hinge],
-                                body.range_low[axis], body.range_high[axis], worst, slack, worst_frame));
+                                body.range_low[axis], body.range_high[axis], worst, slack_used, worst_frame));
 }
 
 std::optional<PlausibilityVerdict> CheckPenetration(const HumanoidSpec& spec, const MotionClip& clip,
@@ -109,6 +119,78 @@ std::optional<PlausibilityVerdict> CheckFootSkate(const HumanoidSpec& spec, cons
   return std::nullopt;
 }
 
+// The largest median contact-frame speed over the feet (0 when no foot touches the floor).
+double WorstFootSkate(const HumanoidSpec& spec, const MotionClip& clip) {
+  double worst = 0;
+  std::vector<double> speeds;
+  for (int b : FootBodies(spec)) {
+    speeds.clear();
+    for (int f = 0; f < clip.num_frames; ++f) {
+      const int i = f * clip.num_bodies + b;
+      if (spec.body(b).geom.LowestPoint(clip.body_pos[i], clip.body_rot[i]) >= kFootContactHeight) continue;
+      speeds.push_back(clip.body_vel[i].head<2>().norm());
+    }
+    if (speeds.empty()) continue;
+    std::nth_element(speeds.begin(), speeds.begin() + speeds.size() / 2, speeds.end());
+    worst = std::max(worst, speeds[speeds.size() / 2]);
+  }
+  return worst;
+}
+
+double DeepestPenetration(const HumanoidSpec& spec, const MotionClip& clip) {
+  double deepest = 0;
+  for (int f = 0; f < clip.num_frames; ++f) {
+    for (int b = 0; b < clip.num_bodies; ++b) deepest = std::max(deepest, -BodyGeomBottom(spec, clip, f, b));
+  }
+  return deepest;
+}
+
+double FastestBody(const MotionClip& clip) {
+  double fastest = 0;
+  for (int f = 0; f + 1 < clip.num_frames; ++f) {
+    for (int b = 0; b < clip.num_bodies; ++b) {
+      fastest = std::max(fastest, (clip.body_pos[(f + 1) * clip.num_bodies + b] - clip.body_pos[f * clip.num_bodies + b])
+                                          .norm() * clip.fps);
+    }
+  }
+  return fastest;
+}
+
+// The clip itself, or a copy with its kinematics computed; null (with *reason) when it cannot be.
+const MotionClip* WithKinematics(const HumanoidSpec& spec, const MotionClip& clip, MotionClip* storage,
+                                 std::string* reason) {
+  if (clip.num_bodies != spec.num_bodies()) {
+    *reason = absl::StrCat("invalid: clip '", clip.name, "' has ", clip.num_bodies, " bodies, the skeleton ",
+                           spec.num_bodies());
+    return nullptr;
+  }
+  const size_t rows = static_cast<size_t>(clip.num_frames) * clip.num_bodies;
+  const bool has_kinematics = clip.num_frames >= 2 && clip.body_pos.size() == rows && clip.body_rot.size() == rows &&
+                              clip.body_vel.size() == rows &&
+                              clip.dof_pos.size() == static_cast<size_t>(clip.num_frames) * clip.num_hinges();
+  if (has_kinematics) return &clip;
+  *storage = clip;
+  if (auto status = ComputeClipKinematics(spec, storage); !status.ok()) {
+    *reason = absl::StrCat("invalid: ", status.message());
+    return nullptr;
+  }
+  return storage;
+}
+
+std::optional<PlausibilityVerdict> CheckDiscriminator(const std::vector<float>& scores, double min_score);
+
+PlausibilityVerdict RunChecks(const HumanoidSpec& spec, const MotionClip& clip, const PlausibilityOptions& options,
+                              const std::vector<double>& hinge_slack, const std::vector<float>* discriminator_scores) {
+  if (auto verdict = CheckJointLimits(spec, clip, hinge_slack)) return *verdict;
+  if (auto verdict = CheckPenetration(spec, clip, options.max_penetration)) return *verdict;
+  if (auto verdict = CheckBodySpeed(spec, clip, options.max_body_speed)) return *verdict;
+  if (auto verdict = CheckFootSkate(spec, clip, options.max_foot_skate)) return *verdict;
+  if (discriminator_scores != nullptr) {
+    if (auto verdict = CheckDiscriminator(*discriminator_scores, options.min_discriminator_score)) return *verdict;
+  }
+  return PlausibilityVerdict{true, ""};
+}
+
 std::optional<PlausibilityVerdict> CheckDiscriminator(const std::vector<float>& scores, double min_score) {
   if (scores.empty()) return Reject("discriminator: no scores given");
   double sum = 0;
@@ -146,31 +228,37 @@ double BodyGeomBottom(const HumanoidSpec& spec, const MotionClip& clip, int fram
 PlausibilityVerdict CheckPlausibility(const HumanoidSpec& spec, const MotionClip& clip,
                                       const PlausibilityOptions& options,
                                       const std::vector<float>* discriminator_scores) {
-  if (clip.num_bodies != spec.num_bodies()) {
-    return Reject(absl::StrCat("invalid: clip '", clip.name, "' has ", clip.num_bodies, " bodies, the skeleton ",
-                               spec.num_bodies()));
-  }
-  const size_t rows = static_cast<size_t>(clip.num_frames) * clip.num_bodies;
-  const bool has_kinematics = clip.num_frames >= 2 && clip.body_pos.size() == rows && clip.body_rot.size() == rows &&
-                              clip.body_vel.size() == rows &&
-                              clip.dof_pos.size() == static_cast<size_t>(clip.num_frames) * clip.num_hinges();
-  MotionClip computed;
-  const MotionClip* checked = &clip;
-  if (!has_kinematics) {
-    computed = clip;
-    if (auto status = ComputeClipKinematics(spec, &computed); !status.ok()) {
-      return Reject(absl::StrCat("invalid: ", status.message()));
+  MotionClip storage;
+  std::string reason;
+  const MotionClip* checked = WithKinematics(spec, clip, &storage, &reason);
+  if (checked == nullptr) return Reject(reason);
+  return RunChecks(spec, *checked, options, std::vector<double>(clip.num_hinges(), options.max_limit_violation),
+                   discriminator_scores);
+}
+
+PlausibilityVerdict CheckVariantPlausibility(const HumanoidSpec& spec, const MotionClip& variant,
+                                             const MotionClip& parent, const PlausibilityOptions& options,
+                                             const std::vector<float>* discriminator_scores) {
+  MotionClip variant_storage, parent_storage;
+  std::string reason;
+  const MotionClip* checked = WithKinematics(spec, variant, &variant_storage, &reason);
+  if (checked == nullptr) return Reject(reason);
+  const MotionClip* reference = WithKinematics(spec, parent, &parent_storage, &reason);
+  if (reference == nullptr) return Reject(absl::StrCat("invalid: the parent: ", reason));
+  // The parent's own defects are allowed, plus the absolute margins on top of them.
+  std::vector<double> hinge_slack(checked->num_hinges(), 0.0);
+  for (int h = 0; h < checked->num_hinges(); ++h) {
+    double parent_violation = 0;
+    for (int f = 0; f < reference->num_frames; ++f) {
+      parent_violation = std::max(parent_violation, HingeViolation(spec, *reference, f, h));
     }
-    checked = &computed;
+    hinge_slack[h] = std::min(parent_violation, 10.0) + options.max_limit_violation;
   }
-  if (auto verdict = CheckJointLimits(spec, *checked, options.max_limit_violation)) return *verdict;
-  if (auto verdict = CheckPenetration(spec, *checked, options.max_penetration)) return *verdict;
-  if (auto verdict = CheckBodySpeed(spec, *checked, options.max_body_speed)) return *verdict;
-  if (auto verdict = CheckFootSkate(spec, *checked, options.max_foot_skate)) return *verdict;
-  if (discriminator_scores != nullptr) {
-    if (auto verdict = CheckDiscriminator(*discriminator_scores, options.min_discriminator_score)) return *verdict;
-  }
-  return PlausibilityVerdict{true, ""};
+  PlausibilityOptions relative = options;
+  relative.max_penetration = std::max(options.max_penetration, DeepestPenetration(spec, *reference) + 0.01);
+  relative.max_body_speed = std::max(options.max_body_speed, 1.25 * FastestBody(*reference));
+  relative.max_foot_skate = std::max(options.max_foot_skate, 1.25 * WorstFootSkate(spec, *reference));
+  return RunChecks(spec, *checked, relative, hinge_slack, discriminator_scores);
 }
 
 }  // namespace modskill

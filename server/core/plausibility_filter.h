@@ -60,6 +60,16 @@ PlausibilityVerdict CheckPlausibility(const HumanoidSpec& spec, const MotionClip
                                       const PlausibilityOptions& options,
                                       const std::vector<float>* discriminator_scores = nullptr);
 
+// A generated clip judged against the clip it was made from: it may not be worse than its
+// parent by more than the options' margins. Retargeted data has defects of its own (knees a few
+// degrees past PHC's ranges, a little floor penetration or skating); a variant is refused for
+// what the generator added, not for what it inherited: per hinge, the parent's largest range
+// violation + max_limit_violation; max_penetration raised to the parent's deepest point + 1 cm;
+// max_body_speed and max_foot_skate to 1.25 x the parent's.
+PlausibilityVerdict CheckVariantPlausibility(const HumanoidSpec& spec, const MotionClip& variant,
+                                             const MotionClip& parent, const PlausibilityOptions& options,
+                                             const std::vector<float>* discriminator_scores = nullptr);
+
 }  // namespace modskill
 
 #endif  // MODSKILL_SERVER_CORE_PLAUSIBILITY_FILTER_H_

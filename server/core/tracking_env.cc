@@ -32,8 +32,9 @@ void TrackingEnv::Reset(EnvRow row) {
 }
 
 void TrackingEnv::ResetTo(int clip, int frame, EnvRow row) {
-  const MotionClip& motion = context_->motions->clip(clip);
-  clip_ = clip;
+  motion_ = context_->motions->shared_clip(clip);
+  const MotionClip& motion = *motion_;
+  clip_ = context_->clip_ids.empty() ? clip : context_->clip_ids[clip];
   frame_ = std::clamp(frame, 0, motion.num_frames - 2);
   episode_steps_ = 0;
   finished_ = false;
@@ -61,7 +62,7 @@ bool TrackingEnv::PhysicsDiverged() const {
 
 TrackingErrors TrackingEnv::CurrentTrackingTerms(float* terms) {
   ReadSimulatedState(*context_->humanoid, data_, &sim_);
-  ReadReferenceState(context_->motions->clip(clip_), frame_, &reference_);
+  ReadReferenceState(*motion_, frame_, &reference_);
   return ComputeImitationTerms(context_->config.reward, sim_, reference_, terms);
 }
 
@@ -125,7 +126,7 @@ void TrackingEnv::Step(const float* action, EnvRow row) {
     case TerminationMode::kNone:
       break;
   }
-  const MotionClip& motion = context_->motions->clip(clip_);
+  const MotionClip& motion = *motion_;
   const bool truncated = !terminated && (frame_ >= motion.num_frames - 1 ||
                                          (config.max_episode_steps > 0 && episode_steps_ >= config.max_episode_steps));
   out.done[i] = terminated || truncated;
@@ -163,7 +164,7 @@ void TrackingEnv::EndEpisode(EnvRow row) {
 
 void TrackingEnv::WriteObservation(EnvRow row) {
   const EnvSpec& spec = *context_->spec;
-  const MotionClip& motion = context_->motions->clip(clip_);
+  const MotionClip& motion = *motion_;
   BatchBuffers& out = *row.buffers;
   const int i = row.index;
   ReadSimulatedState(*context_->humanoid, data_, &sim_);

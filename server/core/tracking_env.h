@@ -44,6 +44,9 @@ struct EnvContext {
   std::shared_ptr<const HumanoidModel> humanoid;
   std::shared_ptr<const EnvSpec> spec;
   std::shared_ptr<const MotionLibrary> motions;
+  // The id an env reports for library clip i (clip_id, ended_clip_id): clip_ids[i], or i itself
+  // when empty. Sessions whose motion set changes keep ids stable while library indices move.
+  std::vector<int> clip_ids;
   const ClipSampler* sampler = nullptr;
   std::shared_ptr<const ReferenceAmpFrames> reference_amp;
   TrackingEnvConfig config;
@@ -64,13 +67,14 @@ class TrackingEnv {
 
   // New episode on a sampled clip and start frame; writes the row's observation.
   void Reset(EnvRow row);
-  // New episode on a given clip and frame (tests, rollouts).
+  // New episode on library clip `clip` at `frame` (tests, rollouts).
   void ResetTo(int clip, int frame, EnvRow row);
   // One control step with `action` (action_size values, part order, in [-1, 1]).
   void Step(const float* action, EnvRow row);
 
   const mjData* data() const { return data_; }
   mjData* mutable_data() { return data_; }
+  // The reported id of the episode's clip (see EnvContext::clip_ids).
   int clip() const { return clip_; }
   int frame() const { return frame_; }
   // With auto_reset off: the episode has ended and the env waits for a reset.
@@ -93,6 +97,9 @@ class TrackingEnv {
   mjData* data_;
   PdController pd_;
   std::mt19937_64 rng_;
+  // The episode's clip, held so that the library can be replaced between steps (generated clips
+  // joining or leaving) without disturbing an episode in progress.
+  std::shared_ptr<const MotionClip> motion_;
   int clip_ = 0;
   int frame_ = 0;
   int episode_steps_ = 0;

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
@@ -49,16 +50,30 @@ absl::StatusOr<double> ToTerminationDistance(float distance, TerminationMode mod
   return mode == TerminationMode::kEvaluation ? 0.5 : 0.25;
 }
 
-// One entry per clip of the session: what the ledger recorded and what the sampler makes of it
-// (`probabilities` = session.adaptive_sampler.Weights(), the floor applied).
+void ToProto(const std::vector<std::string>& part_names, const VariantProvenance& provenance,
+             v1::ClipProvenance* out) {
+  out->set_parent(provenance.parent);
+  out->set_generator(provenance.generator);
+  if (provenance.part >= 0 && provenance.part < static_cast<int>(part_names.size())) {
+    out->set_part(part_names[provenance.part]);
+  }
+  out->set_seed(provenance.seed);
+}
+
+// One entry per clip now in the session: what the ledger recorded and what the sampler makes
+// of it (`probabilities` = session.adaptive_sampler.Weights(), the floor applied).
 void FillClipSamplingStates(const SimulationSession& session, const std::vector<double>& probabilities,
                             google::protobuf::RepeatedPtrField<v1::ClipSamplingState>* out)
     ABSL_EXCLUSIVE_LOCKS_REQUIRED(session.mutex) {
   const std::vector<double>& weights = session.adaptive_sampler.raw_weights();
-  for (size_t c = 0; c < session.clip_names.size(); ++c) {
+  const SessionMotionSet& motion_set = session.motion_set;
+  for (int c = 0; c < motion_set.size(); ++c) {
     const ClipFailureRecord& record = session.ledger.clips()[c];
+    const SessionClipInfo& info = motion_set.info(c);
     v1::ClipSamplingState* clip = out->Add();
-    clip->set_clip(session.clip_names[c]);
+    clip->set_clip(info.name);
+    clip->set_clip_id(info.id);
+    if (info.provenance.has_value()) ToProto(motion_set.part_names(), *info.provenance, clip->mutable_provenance());
     clip->set_weight(weights[c]);
     clip->set_probability(probabilities[c]);
     clip->set_failures(record.failures);
@@ -68,6 +83,33 @@ void FillClipSamplingStates(const SimulationSession& session, const std::vector<
   }
 }
 
+void FillGenerationStats(const SimulationSession& session, v1::GenerationStats* out)
+    ABSL_EXCLUSIVE_LOCKS_REQUIRED(session.mutex) {
+  const GenerationCounters& counters = session.generation;
+  out->set_enabled(session.motion_set.options().enabled);
+  out->set_live_generated_clips(session.motion_set.live_generated());
+  out->set_requests(counters.requests);
+  out->set_generated(counters.generated);
+  out->set_rejected(counters.rejected);
+  for (const auto& [check, count] : counters.rejected_by_check) (*out->mutable_rejected_by_check())[check] = count;
+  out->set_evicted(counters.evicted);
+  out->set_generator_errors(counters.generator_errors);
+  out->set_last_generator_error(counters.last_generator_error);
+  out->set_builtin_fallbacks(counters.builtin_fallbacks);
+  out->set_dropped_requests(counters.dropped_requests);
+}
+
+// The clips that joined and left since the stream last installed a motion set.
+void ToProto(const std::vector<std::string>& part_names, const PendingMotionSet& pending, v1::MotionSetUpdate* out) {
+  for (const SessionClipInfo& info : pending.added) {
+    v1::SessionClip* clip = out->add_added();
+    clip->set_clip_id(info.id);
+    clip->set_name(info.name);
+    if (info.provenance.has_value()) ToProto(part_names, *info.provenance, clip->mutable_provenance());
+  }
+  for (int id : pending.removed_ids) out->add_removed_clip_ids(id);
+}
+
 }  // namespace
 
 absl::StatusOr<std::unique_ptr<SimulationService>> SimulationService::Create(
@@ -75,6 +117,10 @@ absl::StatusOr<std::unique_ptr<SimulationService>> SimulationService::Create(
   if (motions == nullptr || motions->size() == 0) return absl::InvalidArgumentError("motions: the library is empty");
   if (absl::Status status = ValidateSamplingParameters(options.sampling_floor, kDefaultSamplingDecay); !status.ok()) {
     return status;
+  }
+  if (absl::Status status = ValidateGenerationOptions(options.generation); !status.ok()) return status;
+  if (!(options.generator_timeout > absl::ZeroDuration())) {
+    return absl::InvalidArgumentError("--generator_timeout_ms: must be > 0");
   }
   std::unique_ptr<SimulationService> service(new SimulationService(options, motions));
   auto spec = HumanoidSpec::LoadDefault();
@@ -86,6 +132,12 @@ absl::StatusOr<std::unique_ptr<SimulationService>> SimulationService::Create(
   auto layouts = PartLayoutCatalog::LoadDefault(*spec);
   if (!layouts.ok()) return layouts.status();
   service->layouts_ = std::make_unique<PartLayoutCatalog>(*std::move(layouts));
+  std::unique_ptr<ExternalMotionGenerator> external;
+  if (!options.generator_address.empty()) {
+    external = std::make_unique<ExternalMotionGenerator>(options.generator_address, options.generator_timeout);
+  }
+  service->generation_worker_ =
+      std::make_unique<GenerationWorker>(service->skeleton_.get(), std::move(external), options.plausibility);
   return service;
 }
 
@@ -170,10 +222,9 @@ grpc::Status SimulationService::Simulate(grpc::ServerContext* context,
     registry_.Release();
     return ToGrpcStatus(batch.status());
   }
-  std::vector<std::string> clip_names;
-  for (int c = 0; c < motions->size(); ++c) clip_names.push_back(motions->clip(c).name);
-  auto session = std::make_shared<SimulationSession>(*session_id, context->peer(), *std::move(batch), clip_names,
-                                                     options_.sampling, options_.sampling_floor);
+  auto session = std::make_shared<SimulationSession>(*session_id, context->peer(), *std::move(batch),
+                                                     options_.sampling, options_.sampling_floor, options_.generation,
+                                                     config.seed());
   registry_.Register(session);
   EnvBatch& envs = *session->batch;
   LogLine("session %s opened by %s: %d envs, %d clips, layout %s", session->id, session->peer, envs.num_envs(),
@@ -187,12 +238,18 @@ grpc::Status SimulationService::Simulate(grpc::ServerContext* context,
     opened->set_session_id(session->id);
     ToProto(envs.spec(), *humanoid_, opened->mutable_spec());
     opened->mutable_spec()->set_num_motions(motions->size());
-    for (const std::string& name : clip_names) opened->add_clip_names(name);
+    for (const std::string& name : session->clip_names) opened->add_clip_names(name);
     FillStepResult(envs, 0, amp_frames, opened->mutable_initial());
   }
   grpc::Status result = grpc::Status::OK;
   std::vector<float> actions;
   std::vector<double> clip_weights;  // swapped with the session's pending weights, so reused
+  std::optional<PendingMotionSet> motion_set;
+  const std::vector<std::string> part_names = [&] {
+    std::vector<std::string> names;
+    for (const BodyPart& part : envs.spec().layout.parts) names.push_back(part.name);
+    return names;
+  }();
   const int64_t n = envs.num_envs(), action_size = envs.spec().action_size;
   const char* ending = "client closed the stream";
   if (!stream->Write(response)) {
@@ -208,13 +265,19 @@ grpc::Status SimulationService::Simulate(grpc::ServerContext* context,
         result = ToGrpcStatus(status);
         break;
       }
-      // New sampling weights from ReportFailures take effect here, between two steps: this
-      // thread alone steps the batch, so no env is drawing a clip meanwhile.
-      if (session->TakePendingWeights(&clip_weights)) {
-        if (absl::Status status = envs.SetClipWeights(clip_weights); !status.ok()) {
+      // New sampling weights (ReportFailures) and clips (generation rounds) take effect here,
+      // between two steps: this thread alone steps the batch, so no env is drawing a clip meanwhile.
+      response.mutable_step()->clear_motion_set_update();
+      if (session->TakePending(&clip_weights, &motion_set)) {
+        const absl::Status status =
+            motion_set.has_value()
+                ? envs.SetMotions(motion_set->library, motion_set->clip_ids, motion_set->reference_amp, clip_weights)
+                : envs.SetClipWeights(clip_weights);
+        if (!status.ok()) {
           result = Error(grpc::StatusCode::INTERNAL, absl::StrCat("sampler: ", status.message()));
           break;
         }
+        if (motion_set.has_value()) ToProto(part_names, *motion_set, response.mutable_step()->mutable_motion_set_update());
       }
       if (absl::Status status = envs.Step(actions); !status.ok()) {
         result = ToGrpcStatus(status);
@@ -252,36 +315,22 @@ grpc::Status SimulationService::ReportFailures(grpc::ServerContext* context, con
   if (session == nullptr) {
     return Error(grpc::StatusCode::NOT_FOUND, absl::StrCat("session_id: no open session '", request->session_id(), "'"));
   }
-  const MotionLibrary& motions = session->batch->motions();
-  std::vector<FailureLedger::Report> reports;
+  std::vector<NamedClipReport> reports;
   reports.reserve(request->failures_size());
-  for (int r = 0; r < request->failures_size(); ++r) {
-    const v1::ClipFailure& failure = request->failures(r);
-    FailureLedger::Report report;
-    report.clip = motions.Find(failure.clip());
-    if (report.clip < 0) {
-      return Error(grpc::StatusCode::NOT_FOUND,
-                   absl::StrCat("failures[", r, "].clip: '", failure.clip(), "' is not a clip of this session"));
-    }
-    report.frame = failure.frame();
-    report.part_errors.assign(failure.part_errors().begin(), failure.part_errors().end());
-    report.terminated = failure.terminated();
-    reports.push_back(std::move(report));
+  for (const v1::ClipFailure& failure : request->failures()) {
+    reports.push_back(NamedClipReport{failure.clip(), failure.frame(),
+                                      {failure.part_errors().begin(), failure.part_errors().end()},
+                                      failure.terminated()});
   }
-  std::vector<int> frames;
-  for (int c = 0; c < motions.size(); ++c) frames.push_back(motions.clip(c).num_frames);
-  absl::MutexLock lock(&session->mutex);
-  if (absl::Status status = session->ledger.Record(reports, frames); !status.ok()) return ToGrpcStatus(status);
-  for (const FailureLedger::Report& report : reports) {
-    session->adaptive_sampler.Observe(report.clip, /*failed=*/report.terminated);
-  }
-  std::vector<double> probabilities = session->adaptive_sampler.Weights();
-  session->SetPendingWeights(probabilities);
+  auto rounds = session->RecordReports(reports);
+  if (!rounds.ok()) return ToGrpcStatus(rounds.status());
+  generation_worker_->Enqueue(session, *std::move(rounds));
   session->failure_reports += request->failures_size();
   registry_.AddFailureReports(request->failures_size());
   response->set_session_id(session->id);
+  absl::MutexLock lock(&session->mutex);
   response->set_reports(session->ledger.reports());
-  FillClipSamplingStates(*session, probabilities, response->mutable_clips());
+  FillClipSamplingStates(*session, session->adaptive_sampler.Weights(), response->mutable_clips());
   return grpc::Status::OK;
 }
 
@@ -297,7 +346,8 @@ grpc::Status SimulationService::SampleReferenceAmp(grpc::ServerContext* context,
     return Error(grpc::StatusCode::INVALID_ARGUMENT,
                  absl::StrCat("num_samples: ", request->num_samples(), " outside [1, 65536]"));
   }
-  const ReferenceAmpFrames& reference = session->batch->reference_amp();
+  const std::shared_ptr<const ReferenceAmpFrames> reference_frames = session->reference_amp();
+  const ReferenceAmpFrames& reference = *reference_frames;
   const int64_t n = request->num_samples(), width = int64_t{kAmpHistory} * reference.per_frame();
   std::vector<float> samples(static_cast<size_t>(n * width));
   std::mt19937_64 rng(request->seed());
@@ -482,6 +532,7 @@ grpc::Status SimulationService::GetStats(grpc::ServerContext* context, const v1:
     stats->set_failure_reports(session->failure_reports);
     absl::MutexLock lock(&session->mutex);
     FillClipSamplingStates(*session, session->adaptive_sampler.Weights(), stats->mutable_clips());
+    FillGenerationStats(*session, stats->mutable_generation());
   }
   return grpc::Status::OK;
 }

@@ -9,6 +9,9 @@
 #include "modskill/v1/modskill.grpc.pb.h"
 #include "server/core/adaptive_sampler.h"
 #include "server/core/env_batch.h"
+#include "server/core/plausibility_filter.h"
+#include "server/core/session_motion_set.h"
+#include "server/service/generation_worker.h"
 #include "server/service/motion_store.h"
 #include "server/service/session_registry.h"
 
@@ -25,6 +28,12 @@ struct ServiceOptions {
   // no-adaptive ablation), and the probability floor: every clip keeps >= sampling_floor / N.
   SamplingScheme sampling = SamplingScheme::kFailureCount;
   double sampling_floor = kDefaultSamplingFloor;  // in [0, 1]
+  // Generative resampling: variants of failed clips join each session's motion set
+  // (generation.enabled = false: the --no_generative ablation).
+  GenerationOptions generation;
+  PlausibilityOptions plausibility;
+  std::string generator_address;  // external MotionGenerator host:port; empty: built-in only
+  absl::Duration generator_timeout = absl::Seconds(10);
 };
 
 class SimulationService final : public v1::Simulation::Service {
@@ -51,6 +60,7 @@ class SimulationService final : public v1::Simulation::Service {
                         v1::ServerStats* response) override;
 
   SessionRegistry& registry() { return registry_; }
+  GenerationWorker& generation_worker() { return *generation_worker_; }
 
  private:
   SimulationService(const ServiceOptions& options, std::shared_ptr<const MotionLibrary> motions)
@@ -65,6 +75,8 @@ class SimulationService final : public v1::Simulation::Service {
   std::unique_ptr<HumanoidSpec> skeleton_;
   std::shared_ptr<const HumanoidModel> humanoid_;
   std::unique_ptr<PartLayoutCatalog> layouts_;
+  // Last, so that it stops before the skeleton it reads goes away.
+  std::unique_ptr<GenerationWorker> generation_worker_;
 };
 
 }  // namespace modskill

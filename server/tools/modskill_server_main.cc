@@ -10,9 +10,11 @@
 #include "absl/flags/parse.h"
 #include "absl/flags/usage.h"
 #include "absl/strings/ascii.h"
+#include "absl/strings/str_cat.h"
 #include "server/core/adaptive_sampler.h"
 #include "server/core/atomic_file.h"
 #include "server/core/data_paths.h"
+#include "server/core/session_motion_set.h"
 #include "server/service/policy_checkpoint.h"
 #include "server/service/server_log.h"
 #include "server/service/server_runner.h"
@@ -35,6 +37,15 @@ ABSL_FLAG(std::string, sampling, "failure_count",
 ABSL_FLAG(bool, no_adaptive, false, "ablation: uniform clip sampling whatever --sampling says");
 ABSL_FLAG(double, sampling_floor, modskill::kDefaultSamplingFloor,
           "share of the probability spread uniformly: every clip keeps >= sampling_floor / clips (0 .. 1)");
+ABSL_FLAG(bool, no_generative, false, "ablation: never generate variants of failed clips");
+ABSL_FLAG(int, variants_per_failure, 3, "clips generated per round for a failed clip (N in ModSkill), 1 .. 64");
+ABSL_FLAG(int, max_generated_clips, 64,
+          "generated clips a session keeps at most; the least sampled (then oldest) leave first");
+ABSL_FLAG(int, failures_per_round, 8, "failures a clip collects between two of its generation rounds");
+ABSL_FLAG(std::string, generator, "",
+          "host:port of an external MotionGenerator service (e.g. client/python/examples/"
+          "motion_generator_service.py); empty: the built-in generator only");
+ABSL_FLAG(int, generator_timeout_ms, 10000, "deadline of one external generator call");
 
 int main(int argc, char** argv) {
   absl::SetProgramUsageMessage("serves humanoid simulation sessions over gRPC");
@@ -70,6 +81,15 @@ int main(int argc, char** argv) {
       !status.ok()) {
     return fail(std::string(status.message()));
   }
+  GenerationOptions& generation = options.service.generation;
+  generation.enabled = !absl::GetFlag(FLAGS_no_generative);
+  generation.variants_per_round = absl::GetFlag(FLAGS_variants_per_failure);
+  generation.max_generated_clips = absl::GetFlag(FLAGS_max_generated_clips);
+  generation.failures_per_round = absl::GetFlag(FLAGS_failures_per_round);
+  if (absl::Status status = ValidateGenerationOptions(generation); !status.ok()) return fail(std::string(status.message()));
+  options.service.generator_address = absl::GetFlag(FLAGS_generator);
+  if (absl::GetFlag(FLAGS_generator_timeout_ms) < 1) return fail("--generator_timeout_ms must be >= 1");
+  options.service.generator_timeout = absl::Milliseconds(absl::GetFlag(FLAGS_generator_timeout_ms));
   if (!absl::GetFlag(FLAGS_auth_token_file).empty()) {
     auto token = ReadFileToString(absl::GetFlag(FLAGS_auth_token_file), 4096);
     if (!token.ok()) return fail(absl::StrCat("--auth_token_file: ", token.status().message()));
@@ -95,11 +115,16 @@ int main(int argc, char** argv) {
   auto server = StartServer(options, std::make_shared<const MotionLibrary>(*std::move(library)));
   if (!server.ok()) return fail(std::string(server.status().message()));
   LogLine("modskill-server listening on %s:%d (%s%s), %d clips from %s, %d threads per session, %s sampling "
-          "(floor %g)",
+          "(floor %g), generative resampling %s",
           options.bind, (*server)->port(), options.tls_cert_file.empty() ? "insecure" : "TLS",
           options.service.auth_token.empty() ? "" : ", token auth", num_clips, motion_dir,
           options.service.threads_per_session, SamplingSchemeName(options.service.sampling),
-          options.service.sampling_floor);
+          options.service.sampling_floor,
+          !generation.enabled ? std::string("off")
+          : absl::StrCat(generation.variants_per_round, " variants per round, cap ", generation.max_generated_clips,
+                         options.service.generator_address.empty()
+                             ? std::string(", built-in generator")
+                             : absl::StrCat(", generator ", options.service.generator_address)));
   std::fflush(stderr);
   int signal_number = 0;
   sigwait(&signals, &signal_number);

@@ -307,7 +307,10 @@ class Session:
     Attributes:
       session_id: the server's id (for ``report_failures`` and ``stats``).
       spec: the :class:`EnvSpec` of the session's layout (``num_motions``: the session's clips).
-      clip_names: the session's clips; ``StepResult.clip_id`` indexes this list.
+      clip_names: the session's clips by id; ``StepResult.clip_id`` indexes this list. Clips the
+        server generates for the session (generative resampling) are appended as they are
+        announced; evicted ones keep their entry (ids are never reused).
+      clip_provenance: id -> provenance dict (parent, generator, part, seed) of generated clips.
       initial: the :class:`StepResult` after the first reset (step 0).
       last: the latest result (``initial`` before the first step).
       num_envs: rows of every batch.
@@ -326,6 +329,7 @@ class Session:
         self.session_id: str = opened.session_id
         self.spec = EnvSpec.from_proto(opened.spec)
         self.clip_names: List[str] = list(opened.clip_names)
+        self.clip_provenance: Dict[int, Dict[str, Any]] = {}
         self.initial = StepResult.from_proto(opened.initial)
         self.last = self.initial
         self._action_shape = (self.num_envs, self.spec.action_size)
@@ -379,8 +383,20 @@ class Session:
             request = pb.SimulateRequest()
             tensors.encode(actions, request.actions)
             self._requests.put(request)
-            self.last = StepResult.from_proto(self._receive("step").step)
+            step = self._receive("step").step
+            if step.HasField("motion_set_update"):
+                self._apply_motion_set_update(step.motion_set_update)
+            self.last = StepResult.from_proto(step)
             return self.last
+
+    def _apply_motion_set_update(self, update: pb.MotionSetUpdate) -> None:
+        for clip in update.added:
+            if clip.clip_id >= len(self.clip_names):
+                self.clip_names.extend([""] * (clip.clip_id + 1 - len(self.clip_names)))
+            self.clip_names[clip.clip_id] = clip.name
+            p = clip.provenance
+            self.clip_provenance[clip.clip_id] = {"parent": p.parent, "generator": p.generator, "part": p.part,
+                                                  "seed": p.seed}
 
     def part_obs(self, obs: np.ndarray, part: str) -> np.ndarray:
         """The columns of ``obs`` that belong to body part ``part`` (see ``spec.parts``)."""

@@ -1,0 +1,103 @@
+#include "server/service/generation_worker.h"
+
+#include "absl/strings/str_cat.h"
+#include "server/service/server_log.h"
+
+namespace modskill {
+
+GenerationWorker::GenerationWorker(const HumanoidSpec* spec, std::unique_ptr<ExternalMotionGenerator> external,
+                                   const PlausibilityOptions& filter, int max_queued)
+    : spec_(spec), external_(std::move(external)), filter_(filter), max_queued_(max_queued) {
+  thread_ = std::thread([this] { Run(); });
+}
+
+GenerationWorker::~GenerationWorker() {
+  {
+    absl::MutexLock lock(&mutex_);
+    stopping_ = true;
+  }
+  thread_.join();
+}
+
+void GenerationWorker::Enqueue(const std::shared_ptr<SimulationSession>& session,
+                               std::vector<GenerationRequest> rounds) {
+  std::vector<std::string> dropped;
+  {
+    absl::MutexLock lock(&mutex_);
+    for (GenerationRequest& request : rounds) {
+      if (static_cast<int>(queue_.size()) >= max_queued_ || stopping_) {
+        dropped.push_back(request.parent->name);
+        continue;
+      }
+      queue_.push_back(Job{session, std::move(request)});
+    }
+  }
+  for (const std::string& parent : dropped) session->AbandonRound(parent);
+}
+
+void GenerationWorker::WaitIdle() {
+  absl::MutexLock lock(&mutex_);
+  auto idle = [this]() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mutex_) { return queue_.empty() && !busy_; };
+  mutex_.Await(absl::Condition(&idle));
+}
+
+void GenerationWorker::Run() {
+  for (;;) {
+    Job job;
+    {
+      absl::MutexLock lock(&mutex_);
+      auto ready = [this]() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mutex_) { return stopping_ || !queue_.empty(); };
+      mutex_.Await(absl::Condition(&ready));
+      if (stopping_) return;
+      job = std::move(queue_.front());
+      queue_.pop_front();
+      busy_ = true;
+    }
+    // A session that closed meanwhile needs nothing more.
+    if (std::shared_ptr<SimulationSession> session = job.session.lock()) RunRound(*session, job.request);
+    absl::MutexLock lock(&mutex_);
+    busy_ = false;
+  }
+}
+
+void GenerationWorker::RunRound(SimulationSession& session, const GenerationRequest& request) {
+  const PartLayout& layout = session.batch->spec().layout;
+  const MotionClip& parent = *request.parent;
+  GenerationCounters counters;
+  absl::StatusOr<std::vector<MotionVariant>> candidates = absl::UnavailableError("no external generator");
+  if (external_ != nullptr) {
+    candidates = external_->Generate(*spec_, layout, parent, request.part, request.seed, request.count);
+    if (!candidates.ok()) {
+      ++counters.generator_errors;
+      counters.last_generator_error = std::string(candidates.status().message());
+      ++counters.builtin_fallbacks;
+      LogLine("session %s: generator %s failed for '%s' (%s); using the built-in generator", session.id,
+              external_->address(), parent.name, candidates.status().ToString());
+    }
+  }
+  if (!candidates.ok()) {
+    VariantOptions options;
+    options.count = request.count;
+    options.part = request.part;
+    options.seed = request.seed;
+    candidates = GenerateVariants(*spec_, layout, parent, options);
+    if (!candidates.ok()) {
+      LogLine("session %s: built-in generator failed for '%s': %s", session.id, parent.name,
+              candidates.status().ToString());
+      candidates = std::vector<MotionVariant>();
+    }
+  }
+  std::vector<MotionVariant> accepted;
+  for (MotionVariant& variant : *candidates) {
+    const PlausibilityVerdict verdict = CheckVariantPlausibility(*spec_, variant.clip, parent, filter_);
+    if (verdict.accepted) {
+      accepted.push_back(std::move(variant));
+      continue;
+    }
+    ++counters.rejected;
+    ++counters.rejected_by_check[verdict.reason.substr(0, verdict.reason.find(':'))];
+  }
+  session.CommitRound(parent.name, std::move(accepted), counters);
+}
+
+}  // namespace modskill

@@ -1,0 +1,57 @@
+// Generative resampling off the RPC threads: a background thread that turns each planned round
+// (a failed clip, a part, a seed) into new clips, with the external generator when one is set
+// (--generator) and the built-in displacement-mapping generator otherwise or when the external
+// one fails, filters them for plausibility and commits the survivors to the session. A slow or
+// dead generator therefore never stalls ReportFailures or a Simulate stream.
+#ifndef MODSKILL_SERVER_SERVICE_GENERATION_WORKER_H_
+#define MODSKILL_SERVER_SERVICE_GENERATION_WORKER_H_
+
+#include <deque>
+#include <memory>
+#include <thread>
+
+#include "absl/synchronization/mutex.h"
+#include "server/core/humanoid_spec.h"
+#include "server/core/plausibility_filter.h"
+#include "server/service/external_motion_generator.h"
+#include "server/service/simulation_session.h"
+
+namespace modskill {
+
+class GenerationWorker {
+ public:
+  // `external` may be null (built-in generator only). `max_queued`: rounds waiting at most;
+  // more are dropped (counted per session) rather than piling up behind a slow generator.
+  GenerationWorker(const HumanoidSpec* spec, std::unique_ptr<ExternalMotionGenerator> external,
+                   const PlausibilityOptions& filter, int max_queued = 256);
+  ~GenerationWorker();  // finishes the round in progress, drops the rest
+  GenerationWorker(const GenerationWorker&) = delete;
+  GenerationWorker& operator=(const GenerationWorker&) = delete;
+
+  // Queues the rounds; those that do not fit are abandoned on the session.
+  void Enqueue(const std::shared_ptr<SimulationSession>& session, std::vector<GenerationRequest> rounds);
+  // Blocks until the queue is empty and no round is running (tests, benchmarks).
+  void WaitIdle();
+
+ private:
+  struct Job {
+    std::weak_ptr<SimulationSession> session;
+    GenerationRequest request;
+  };
+  void Run();
+  void RunRound(SimulationSession& session, const GenerationRequest& request);
+
+  const HumanoidSpec* spec_;
+  const std::unique_ptr<ExternalMotionGenerator> external_;
+  const PlausibilityOptions filter_;
+  const int max_queued_;
+  absl::Mutex mutex_;
+  std::deque<Job> queue_ ABSL_GUARDED_BY(mutex_);
+  bool busy_ ABSL_GUARDED_BY(mutex_) = false;
+  bool stopping_ ABSL_GUARDED_BY(mutex_) = false;
+  std::thread thread_;
+};
+
+}  // namespace modskill
+
+#endif  // MODSKILL_SERVER_SERVICE_GENERATION_WORKER_H_
