@@ -27,7 +27,14 @@ torch::Tensor MlpImpl::forward(const torch::Tensor& x) {
 PartControllerImpl::PartControllerImpl(int64_t input_size, int64_t action_size, const std::vector<int64_t>& hidden)
     : input_size_(input_size),
       action_size_(action_size),
-      mlp_(register_module("mlp", Mlp(input_size, hidden, action_size, Activation::kElu))) {}
+      mlp_(register_module("mlp", Mlp(input_size, hidden, action_size, Activation::kElu))) {
+  // Action means start near 0 (PD targets near the joints' mid-range), as PPO policy heads
+  // usually do: a default-initialized head commands random poses up to pi away and every first
+  // episode ends within two steps.
+  torch::NoGradGuard no_grad;
+  mlp_->output_layer()->weight.mul_(0.01);
+  mlp_->output_layer()->bias.zero_();
+}
 
 torch::Tensor PartControllerImpl::forward(const torch::Tensor& input) { return mlp_->forward(input); }
 
