@@ -343,6 +343,41 @@ TEST(PlausibilityFilterTest, RejectsPlantedDefectsNamingTheCheck) {
   if (!verdict.accepted) EXPECT_EQ(verdict.reason.rfind("joint_limit: ", 0), 0u) << verdict.reason;
 }
 
+// Variants are judged against their parent: defects they inherit pass, defects they add do not.
+TEST(PlausibilityFilterTest, VariantsAreJudgedAgainstTheirParent) {
+  const HumanoidSpec& spec = DefaultSpec();
+  const MotionClip& walk = ShippedClip("deepmimic_walk");
+  // The retargeted walk is out of PHC's knee ranges by a few degrees: strict absolute checks fail it...
+  ASSERT_FALSE(CheckPlausibility(spec, walk, PlausibilityOptions()).accepted);
+  // ...but an unchanged copy adds nothing, and neither does an arm variant.
+  EXPECT_TRUE(CheckVariantPlausibility(spec, walk, walk, PlausibilityOptions()).accepted);
+  VariantOptions options;
+  options.part = 4;  // R_Arm
+  options.count = 2;
+  for (const MotionVariant& variant : Generate(walk, options)) {
+    const PlausibilityVerdict verdict = CheckVariantPlausibility(spec, variant.clip, walk, PlausibilityOptions());
+    EXPECT_TRUE(verdict.accepted) << variant.clip.name << ": " << verdict.reason;
+  }
+  // A knee bent far past what the parent does, a sunk root, or a teleport are refused.
+  auto verdict_after = [&](const std::function<void(MotionClip*)>& plant) {
+    MotionClip clip = walk;
+    plant(&clip);
+    EXPECT_TRUE(ComputeClipKinematics(spec, &clip).ok());
+    return CheckVariantPlausibility(spec, clip, walk, PlausibilityOptions());
+  };
+  const int knee = spec.BodyIndex("L_Knee");
+  PlausibilityVerdict verdict = verdict_after([&](MotionClip* clip) {
+    for (int f = 0; f < clip->num_frames; ++f) clip->local(f, knee) = HingeRotation(0.0, 1.2, 0.0);
+  });
+  EXPECT_EQ(verdict.reason.rfind("joint_limit: L_Knee_", 0), 0u) << verdict.reason;
+  verdict = verdict_after([](MotionClip* clip) {
+    for (Vec3& p : clip->root_pos) p.z() -= 0.2;
+  });
+  EXPECT_EQ(verdict.reason.rfind("penetration: ", 0), 0u) << verdict.reason;
+  verdict = verdict_after([](MotionClip* clip) { clip->root_pos[15].x() += 1.0; });
+  EXPECT_EQ(verdict.reason.rfind("body_speed: ", 0), 0u) << verdict.reason;
+}
+
 TEST(MotionVariantsTest, BadOptionsAreErrorsNamingTheField) {
   const MotionClip& walk = ShippedClip("deepmimic_walk");
   auto error = [&](const MotionClip& parent, const VariantOptions& options) -> std::string {

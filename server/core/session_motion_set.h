@@ -39,7 +39,7 @@ struct GenerationOptions {
   bool enabled = true;          // false: the --no_generative ablation; PlanRounds never asks
   int variants_per_round = 3;   // N in ModSkill, [1, 64]
   int max_generated_clips = 64; // live generated clips per session, [0, 100000]
-  int failures_per_round = 8;   // terminated reports on a clip between two of its rounds, >= 1
+  int failures_per_round = 200; // terminated reports on a clip between two of its rounds, >= 1
 };
 
 // Checks the ranges above; messages name the server flag.

@@ -41,7 +41,8 @@ ABSL_FLAG(bool, no_generative, false, "ablation: never generate variants of fail
 ABSL_FLAG(int, variants_per_failure, 3, "clips generated per round for a failed clip (N in ModSkill), 1 .. 64");
 ABSL_FLAG(int, max_generated_clips, 64,
           "generated clips a session keeps at most; the least sampled (then oldest) leave first");
-ABSL_FLAG(int, failures_per_round, 8, "failures a clip collects between two of its generation rounds");
+ABSL_FLAG(int, failures_per_round, 200,
+          "terminated episodes a clip collects between two of its generation rounds (the paper: a round every 2e8 steps)");
 ABSL_FLAG(std::string, generator, "",
           "host:port of an external MotionGenerator service (e.g. client/python/examples/"
           "motion_generator_service.py); empty: the built-in generator only");

@@ -209,3 +209,63 @@ class DelayTest(unittest.TestCase):
 
 if __name__ == "__main__":
     unittest.main()
+
+
+SERVER_BINARY = os.environ.get("MODSKILL_SERVER_BINARY", "")
+
+
+@unittest.skipUnless(SERVER_BINARY and os.path.exists(SERVER_BINARY), "MODSKILL_SERVER_BINARY is not set")
+class ServerWithExampleGeneratorTest(unittest.TestCase):
+    """modskill-server --generator <the example service>: failed clips get variants from Python."""
+
+    def setUp(self):
+        self.generator, self.generator_address = start_service("--generator_name", "python_example")
+        port = free_port()
+        self.server = subprocess.Popen(
+            [SERVER_BINARY, f"--port={port}", "--threads=1", f"--generator={self.generator_address}",
+             "--failures_per_round=4", "--variants_per_failure=2", "--generator_timeout_ms=5000"],
+            stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT)
+        self.address = f"127.0.0.1:{port}"
+
+    def tearDown(self):
+        self.server.terminate()
+        try:
+            self.server.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            self.server.kill()
+            self.server.wait()
+        stop_service(self.generator)
+
+    def connect(self):
+        import modskill
+        for _ in range(40):
+            try:
+                return modskill.Client(self.address, timeout=0.25)
+            except modskill.ConnectError:
+                self.assertIsNone(self.server.poll(), "the server exited")
+        self.fail("the server did not start")
+
+    def test_failed_clip_gets_variants_from_the_python_generator(self):
+        import time
+        with self.connect() as client, client.session(num_envs=8, seed=3) as session:
+            parts = [part.name for part in session.spec.parts]
+            errors = [0.8 if name == "L_Arm" else 0.1 for name in parts]
+            client.report_failures(session.session_id,
+                                   [{"clip": "deepmimic_walk", "part_errors": errors}] * 4)
+            zeros = np.zeros((8, session.spec.action_size), np.float32)
+            deadline = time.monotonic() + 20
+            while len(session.clip_provenance) < 2 and time.monotonic() < deadline:
+                session.step(zeros)
+            self.assertEqual(len(session.clip_provenance), 2, "no generated clips were announced")
+            for clip_id, provenance in session.clip_provenance.items():
+                self.assertEqual(provenance["generator"], "python_example")
+                self.assertEqual(provenance["parent"], "deepmimic_walk")
+                self.assertEqual(provenance["part"], "L_Arm")
+                self.assertTrue(session.clip_names[clip_id].startswith("deepmimic_walk~L_Arm~"))
+            stats = client.stats()
+            [mine] = [s for s in stats["sessions"] if s["session_id"] == session.session_id]
+            generation = mine["generation"]
+            self.assertEqual(int(generation["generated"]), 2)
+            self.assertEqual(int(generation.get("generator_errors", 0)), 0)
+            generated = [c for c in mine["clips"] if (c.get("provenance") or {}).get("parent")]
+            self.assertEqual(len(generated), 2)
