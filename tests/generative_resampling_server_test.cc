@@ -2,6 +2,7 @@
 // names and eviction; the server adding variants of failed clips to a live session; and the
 // external MotionGenerator path, including a generator that is down, slow or malformed.
 #include <cstring>
+#include <filesystem>
 #include <optional>
 #include <thread>
 
@@ -10,6 +11,7 @@
 
 #include "absl/strings/match.h"
 #include "absl/time/clock.h"
+#include "server/core/clip_file.h"
 #include "server/core/session_motion_set.h"
 #include "server/service/external_motion_generator.h"
 #include "tests/server_fixture.h"
@@ -157,8 +159,10 @@ v1::ReportFailuresRequest ArmFailures(const std::string& session_id, const std::
 
 class GenerativeServerTest : public ::testing::Test {
  protected:
-  void Start(const std::string& generator = "", absl::Duration timeout = absl::Seconds(5), int cap = 64) {
+  void Start(const std::string& generator = "", absl::Duration timeout = absl::Seconds(5), int cap = 64,
+             const std::string& save_dir = "") {
     ServerOptions options;
+    options.service.generated_clip_dir = save_dir;
     options.service.max_envs_per_session = 64;
     options.service.generation.failures_per_round = 4;
     options.service.generation.variants_per_round = 3;
@@ -222,7 +226,9 @@ class GenerativeServerTest : public ::testing::Test {
 };
 
 TEST_F(GenerativeServerTest, FailedClipGetsVariantsThatEnvsThenTrain) {
-  Start();
+  const std::string save_dir = std::string(MODSKILL_TEST_TMP_DIR) + "/generated_clips";
+  std::filesystem::remove_all(save_dir);
+  Start("", absl::Seconds(5), 64, save_dir);
   const int originals = stream_->opened().clip_names_size();
   FailTheWalk();
   const std::optional<v1::MotionSetUpdate> update = StepUntilUpdate();
@@ -238,6 +244,10 @@ TEST_F(GenerativeServerTest, FailedClipGetsVariantsThatEnvsThenTrain) {
     EXPECT_TRUE(absl::StartsWith(clip.name(), "deepmimic_walk~R_Arm~")) << clip.name();
     EXPECT_EQ(stream_->clip_name(clip.clip_id()), clip.name());
     ids.push_back(clip.clip_id());
+    // --save_generated: the clip is on disk under its session name.
+    auto saved = ReadClipFile(save_dir + "/" + session_id_ + "/" + clip.name() + ".msclip", DefaultSpec());
+    ASSERT_TRUE(saved.ok()) << saved.status();
+    EXPECT_EQ(saved->name, clip.name());
   }
   EXPECT_EQ(stream_->live_clips(), originals + 3);
 

@@ -1,13 +1,20 @@
 #include "server/service/generation_worker.h"
 
+#include <filesystem>
+
 #include "absl/strings/str_cat.h"
+#include "server/core/clip_file.h"
 #include "server/service/server_log.h"
 
 namespace modskill {
 
 GenerationWorker::GenerationWorker(const HumanoidSpec* spec, std::unique_ptr<ExternalMotionGenerator> external,
-                                   const PlausibilityOptions& filter, int max_queued)
-    : spec_(spec), external_(std::move(external)), filter_(filter), max_queued_(max_queued) {
+                                   const PlausibilityOptions& filter, std::string save_dir, int max_queued)
+    : spec_(spec),
+      external_(std::move(external)),
+      filter_(filter),
+      save_dir_(std::move(save_dir)),
+      max_queued_(max_queued) {
   thread_ = std::thread([this] { Run(); });
 }
 
@@ -97,7 +104,18 @@ void GenerationWorker::RunRound(SimulationSession& session, const GenerationRequ
     ++counters.rejected;
     ++counters.rejected_by_check[verdict.reason.substr(0, verdict.reason.find(':'))];
   }
-  session.CommitRound(parent.name, std::move(accepted), counters);
+  const std::vector<std::shared_ptr<const MotionClip>> added =
+      session.CommitRound(parent.name, std::move(accepted), counters);
+  if (save_dir_.empty()) return;
+  for (const auto& clip : added) {
+    const std::string directory = absl::StrCat(save_dir_, "/", session.id);
+    const std::string path = absl::StrCat(directory, "/", clip->name, kClipFileExtension);
+    std::error_code error;
+    std::filesystem::create_directories(directory, error);
+    if (absl::Status status = WriteClipFile(path, *clip); !status.ok()) {
+      LogLine("session %s: could not save '%s': %s", session.id, path, status.ToString());
+    }
+  }
 }
 
 }  // namespace modskill

@@ -22,8 +22,10 @@ class GenerationWorker {
  public:
   // `external` may be null (built-in generator only). `max_queued`: rounds waiting at most;
   // more are dropped (counted per session) rather than piling up behind a slow generator.
+  // `save_dir`: when set, every clip that joins a session is also written there as
+  // <session>/<name>.msclip (for inspection and reuse; `modskill-motion inspect` reads them).
   GenerationWorker(const HumanoidSpec* spec, std::unique_ptr<ExternalMotionGenerator> external,
-                   const PlausibilityOptions& filter, int max_queued = 256);
+                   const PlausibilityOptions& filter, std::string save_dir = "", int max_queued = 256);
   ~GenerationWorker();  // finishes the round in progress, drops the rest
   GenerationWorker(const GenerationWorker&) = delete;
   GenerationWorker& operator=(const GenerationWorker&) = delete;
@@ -44,6 +46,7 @@ class GenerationWorker {
   const HumanoidSpec* spec_;
   const std::unique_ptr<ExternalMotionGenerator> external_;
   const PlausibilityOptions filter_;
+  const std::string save_dir_;
   const int max_queued_;
   absl::Mutex mutex_;
   std::deque<Job> queue_ ABSL_GUARDED_BY(mutex_);

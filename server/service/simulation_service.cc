@@ -137,7 +137,8 @@ absl::StatusOr<std::unique_ptr<SimulationService>> SimulationService::Create(
     external = std::make_unique<ExternalMotionGenerator>(options.generator_address, options.generator_timeout);
   }
   service->generation_worker_ =
-      std::make_unique<GenerationWorker>(service->skeleton_.get(), std::move(external), options.plausibility);
+      std::make_unique<GenerationWorker>(service->skeleton_.get(), std::move(external), options.plausibility,
+                                         options.generated_clip_dir);
   return service;
 }
 

@@ -34,6 +34,7 @@ struct ServiceOptions {
   PlausibilityOptions plausibility;
   std::string generator_address;  // external MotionGenerator host:port; empty: built-in only
   absl::Duration generator_timeout = absl::Seconds(10);
+  std::string generated_clip_dir;  // also write every generated clip that joins a session here
 };
 
 class SimulationService final : public v1::Simulation::Service {

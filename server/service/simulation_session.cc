@@ -71,8 +71,9 @@ absl::StatusOr<std::vector<GenerationRequest>> SimulationSession::RecordReports(
   return rounds;
 }
 
-void SimulationSession::CommitRound(const std::string& parent, std::vector<MotionVariant> accepted,
-                                    const GenerationCounters& counters) {
+std::vector<std::shared_ptr<const MotionClip>> SimulationSession::CommitRound(const std::string& parent,
+                                                                              std::vector<MotionVariant> accepted,
+                                                                              const GenerationCounters& counters) {
   absl::MutexLock lock(&mutex);
   generation.generated += static_cast<int64_t>(accepted.size());
   generation.rejected += counters.rejected;
@@ -87,7 +88,7 @@ void SimulationSession::CommitRound(const std::string& parent, std::vector<Motio
                                   ? adaptive_sampler.raw_weights()[parent_slot] - kFailureCountEpsilon
                                   : 0.0;
   MotionSetChange change = motion_set.Commit(parent, std::move(accepted), adaptive_sampler.raw_weights());
-  if (change.added.empty() && change.removed_ids.empty()) return;
+  if (change.added.empty() && change.removed_ids.empty()) return {};
   generation.evicted += static_cast<int64_t>(change.evicted.size());
   ledger.Remap(change.previous_slot);
   adaptive_sampler.Remap(change.previous_slot, parent_count);
@@ -98,9 +99,14 @@ void SimulationSession::CommitRound(const std::string& parent, std::vector<Motio
   pending.library = motion_set.library();
   pending.clip_ids = motion_set.clip_ids();
   pending.reference_amp = reference_amp_;
-  for (SessionClipInfo& info : change.added) pending.added.push_back(std::move(info));
+  std::vector<std::shared_ptr<const MotionClip>> added;
+  for (SessionClipInfo& info : change.added) {
+    added.push_back(motion_set.library()->shared_clip(motion_set.Find(info.name)));
+    pending.added.push_back(std::move(info));
+  }
   for (int removed : change.removed_ids) pending.removed_ids.push_back(removed);
   PublishWeights();
+  return added;
 }
 
 void SimulationSession::AbandonRound(const std::string& parent) {

@@ -66,8 +66,10 @@ class SimulationSession {
   absl::StatusOr<std::vector<GenerationRequest>> RecordReports(const std::vector<NamedClipReport>& reports)
       ABSL_LOCKS_EXCLUDED(mutex);
   // A finished round: `accepted` clips join the motion set (evicting under the cap); the
-  // counters are added to the session's.
-  void CommitRound(const std::string& parent, std::vector<MotionVariant> accepted, const GenerationCounters& counters)
+  // counters are added to the session's. Returns the clips that joined, under their session names.
+  std::vector<std::shared_ptr<const MotionClip>> CommitRound(const std::string& parent,
+                                                             std::vector<MotionVariant> accepted,
+                                                             const GenerationCounters& counters)
       ABSL_LOCKS_EXCLUDED(mutex);
   // A round that could not start (queue full): frees the parent for a later round.
   void AbandonRound(const std::string& parent) ABSL_LOCKS_EXCLUDED(mutex);

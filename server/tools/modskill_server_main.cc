@@ -47,6 +47,8 @@ ABSL_FLAG(std::string, generator, "",
           "host:port of an external MotionGenerator service (e.g. client/python/examples/"
           "motion_generator_service.py); empty: the built-in generator only");
 ABSL_FLAG(int, generator_timeout_ms, 10000, "deadline of one external generator call");
+ABSL_FLAG(std::string, save_generated, "",
+          "directory: also write every generated clip that joins a session as <session>/<name>.msclip");
 
 int main(int argc, char** argv) {
   absl::SetProgramUsageMessage("serves humanoid simulation sessions over gRPC");
@@ -91,6 +93,7 @@ int main(int argc, char** argv) {
   options.service.generator_address = absl::GetFlag(FLAGS_generator);
   if (absl::GetFlag(FLAGS_generator_timeout_ms) < 1) return fail("--generator_timeout_ms must be >= 1");
   options.service.generator_timeout = absl::Milliseconds(absl::GetFlag(FLAGS_generator_timeout_ms));
+  options.service.generated_clip_dir = absl::GetFlag(FLAGS_save_generated);
   if (!absl::GetFlag(FLAGS_auth_token_file).empty()) {
     auto token = ReadFileToString(absl::GetFlag(FLAGS_auth_token_file), 4096);
     if (!token.ok()) return fail(absl::StrCat("--auth_token_file: ", token.status().message()));
