@@ -6,6 +6,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "server/core/plausibility_filter.h"
+#include "server/core/seed_mixing.h"
 
 namespace modskill {
 namespace {
@@ -36,12 +37,7 @@ class VariantRng {
   double Uniform(double low, double high) { return low + (high - low) * Uniform(); }
 
  private:
-  static uint64_t Mix(uint64_t z) {
-    z += 0x9E3779B97F4A7C15ull;
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-  }
+  static uint64_t Mix(uint64_t z) { return MixSeed(z); }
   uint64_t Next() { return Mix(state_ += 0x9E3779B97F4A7C15ull); }
   uint64_t state_;
 };

@@ -4,18 +4,9 @@
 #include <numeric>
 
 #include "absl/strings/str_cat.h"
+#include "server/core/seed_mixing.h"
 
 namespace modskill {
-namespace {
-
-uint64_t Mix(uint64_t x) {
-  x += 0x9E3779B97F4A7C15ull;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-  return x ^ (x >> 31);
-}
-
-}  // namespace
 
 absl::Status ValidateGenerationOptions(const GenerationOptions& options) {
   if (options.variants_per_round < 1 || options.variants_per_round > 64) {
@@ -72,7 +63,7 @@ std::vector<GenerationRequest> SessionMotionSet::PlanRounds(const std::vector<Fa
     GenerationRequest request;
     request.parent = clips_[failure.slot];
     request.count = options_.variants_per_round;
-    request.seed = Mix(seed_ ^ Mix(static_cast<uint64_t>(failure.slot) << 20 ^ static_cast<uint64_t>(parent.rounds)));
+    request.seed = MixSeed(seed_ ^ MixSeed(static_cast<uint64_t>(failure.slot) << 20 ^ static_cast<uint64_t>(parent.rounds)));
     // Even rounds are part-level on the worst part when part errors are known, odd ones whole body.
     if (parent.rounds % 2 == 0 && parts > 1 && parent.part_error_reports > 0) {
       request.part = static_cast<int>(std::max_element(parent.part_error_sum.begin(), parent.part_error_sum.end()) -
