@@ -61,12 +61,25 @@ for run in full ablation; do
     >"$OUT/$run/learner.log" 2>&1 &
   LEARNERS+=($!)
 done
+# Server stats (sampler weights, generated clips) every 30 s while the sessions live: the last
+# snapshot before the learners finish is kept in OUT/<run>_stats.txt.
+(
+  while true; do
+    sleep 30
+    for run in full ablation; do
+      if "$BUILD/client/modskill-client" --server "127.0.0.1:${PORT[$run]}" stats >"$OUT/${run}_stats.tmp" 2>&1 &&
+         grep -q "^live sessions" "$OUT/${run}_stats.tmp"; then
+        mv "$OUT/${run}_stats.tmp" "$OUT/${run}_stats.txt"
+      fi
+    done
+  done
+) &
+SNAPSHOTS=$!
+PIDS+=($SNAPSHOTS)
 status=0
 for pid in "${LEARNERS[@]}"; do wait "$pid" || status=$?; done
+kill "$SNAPSHOTS" 2>/dev/null || true
 [ "$status" = 0 ] || { echo "active_learning_bench: a learner failed; see $OUT/*/learner.log" >&2; exit 1; }
-for run in full ablation; do
-  "$BUILD/client/modskill-client" --server "127.0.0.1:${PORT[$run]}" stats >"$OUT/${run}_stats.txt" 2>&1 || true
-done
 
 # Both policies are evaluated by the same server, one after the other.
 for run in full ablation; do
@@ -83,21 +96,23 @@ for run, label in (("full", "adaptive + generative"), ("ablation", "no adaptive,
     progress = list(csv.DictReader(open(os.path.join(out, run, "progress.csv"))))
     tail = progress[-10:]
     rows.append((label, ev, progress[-1], statistics.median(float(r["episode_length"]) for r in tail),
-                 statistics.median(float(r["episode_return"]) for r in tail)))
+                 statistics.median(float(r["episode_return"]) for r in tail),
+                 statistics.mean(c["steps"] for c in ev["clips"])))
 distances = sorted(rows[0][1]["success_at_distance"], reverse=True)
 md = [f"Same learner (`small`), same seed, {minutes} min each, trained side by side on one 2-core machine; "
       "evaluated on the shipped library (evaluation termination 0.5 m).", "",
-      "| Method | env steps | Succ ↑ | E_g-mpjpe ↓ | E_mpjpe ↓ | E_acc ↓ | E_vel ↓ | episode length (train) | episode return (train) |",
-      "|---|---|---|---|---|---|---|---|---|"]
-for label, ev, last, length, ret in rows:
+      "| Method | env steps | Succ ↑ | E_g-mpjpe ↓ | E_mpjpe ↓ | E_acc ↓ | E_vel ↓ | steps tracked (eval) | episode length (train) | episode return (train) |",
+      "|---|---|---|---|---|---|---|---|---|---|"]
+for label, ev, last, length, ret, tracked in rows:
     md.append(f"| {label} | {int(last['env_steps']):,} | {100 * ev['success_rate']:.1f} % | {ev['g_mpjpe_mm']:.1f} | "
               f"{ev['mpjpe_mm']:.1f} | {ev['acc_error_mm_per_frame2']:.1f} | {ev['vel_error_mm_per_frame']:.1f} | "
-              f"{length:.2f} | {ret:.2f} |")
+              f"{tracked:.1f} | {length:.2f} | {ret:.2f} |")
 md += ["", "Success at looser termination distances (max over the clip of the mean body error <= d):", "",
        "| Method | " + " | ".join(f"{d} m" for d in distances) + " |", "|---|" + "---|" * len(distances)]
 for label, ev, *_ in rows:
     md.append(f"| {label} | " + " | ".join(f"{100 * ev['success_at_distance'][d]:.0f} %" for d in distances) + " |")
-md += ["", "Training columns: medians of the last 10 iterations of progress.csv."]
+md += ["", "steps tracked: mean control steps per clip before the evaluation termination (or the clip's end). "
+       "Training columns: medians of the last 10 iterations of progress.csv, over the clips each run sampled."]
 text = "\n".join(md) + "\n"
 open(os.path.join(out, "table3.md"), "w").write(text)
 print(text)
