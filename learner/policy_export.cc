@@ -165,4 +165,34 @@ absl::Status ExportPolicy(ModSkillPolicy& policy, RunningMeanStd& obs_norm, cons
   }
 }
 
+absl::StatusOr<std::string> ExportDiscriminatorScorer(AmpDiscriminatorImpl& discriminator,
+                                                      const RunningMeanStdImpl& amp_norm) {
+  const MlpImpl& mlp = *discriminator.mlp();
+  if (amp_norm.size() != mlp.layers().front()->weight.size(1)) {
+    return absl::InvalidArgumentError(absl::StrCat("ExportDiscriminatorScorer: amp_norm has size ", amp_norm.size(),
+                                                   ", the discriminator takes ", mlp.layers().front()->weight.size(1)));
+  }
+  try {
+    torch::NoGradGuard no_grad;
+    torch::jit::Module module("AmpDiscriminatorScorer");
+    module.register_buffer("amp_mean", amp_norm.mean().detach().clone());
+    module.register_buffer("amp_var", amp_norm.var().detach().clone());
+    RegisterMlp(mlp, "discriminator", &module);
+    std::string src = "def forward(self, amp_obs):\n";
+    absl::StrAppend(&src, "    x = torch.clamp((amp_obs - self.amp_mean.to(amp_obs.dtype)) / torch.sqrt(self.amp_var + ",
+                    ScriptFloat(RunningMeanStdImpl::kEpsilon), ").to(amp_obs.dtype), ",
+                    ScriptFloat(-RunningMeanStdImpl::kClip), ", ", ScriptFloat(RunningMeanStdImpl::kClip), ")\n");
+    EmitMlp(mlp, "discriminator", "x", "logit", &src);
+    absl::StrAppend(&src, "    logit = logit.reshape([-1])\n",
+                    "    return torch.clamp(1.0 - 0.25 * (logit - 1.0) * (logit - 1.0), 0.0, 1.0)\n");
+    module.define(src);
+    std::ostringstream out(std::ios::binary);
+    module.save(out);
+    return out.str();
+  } catch (const std::exception& e) {
+    std::string message = e.what();
+    return absl::InternalError(absl::StrCat("ExportDiscriminatorScorer: ", message.substr(0, message.find('\n'))));
+  }
+}
+
 }  // namespace modskill::learner

@@ -7,6 +7,8 @@
 #include <string>
 
 #include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "learner/amp_discriminator.h"
 #include "learner/modskill_policy.h"
 #include "learner/running_mean_std.h"
 #include "server/service/policy_checkpoint.h"
@@ -25,6 +27,14 @@ absl::Status ExportPolicy(ModSkillPolicy& policy, RunningMeanStd& obs_norm, cons
 
 // The generated TorchScript source of ExportPolicy (for reading and tests).
 std::string PolicyScriptSource(const ModSkillPolicyImpl& policy);
+
+// The AMP discriminator as a plausibility scorer for the server's generated clips
+// (ReportFailuresRequest.discriminator): a TorchScript archive whose forward maps RAW AMP
+// observations [N, amp_obs_size] to the AMP style reward max(0, 1 - 0.25 (D - 1)^2) in [0, 1]
+// (1: indistinguishable from the reference motion), normalization included, as the trainer
+// computes it. Returned as bytes, for sending.
+absl::StatusOr<std::string> ExportDiscriminatorScorer(AmpDiscriminatorImpl& discriminator,
+                                                      const RunningMeanStdImpl& amp_norm);
 
 }  // namespace modskill::learner
 

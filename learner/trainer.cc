@@ -495,11 +495,22 @@ void Trainer::RecordEpisodeEnds(SessionSlot* slot, const v1::StepResult& result)
 }
 
 void Trainer::ReportFailures() {
+  // The discriminator goes along, so the servers can hold generated clips to ModSkill's rule.
+  std::string discriminator;
+  if (config_.amp_reward_weight > 0) {
+    auto scorer = ExportDiscriminatorScorer(*discriminator_, *amp_norm_);
+    if (scorer.ok()) {
+      discriminator = *std::move(scorer);
+    } else {
+      LogLine("discriminator not sent: %s", scorer.status().message());
+    }
+  }
   for (SessionSlot* slot : servers_->Alive()) {
     PendingReports& pending = pending_reports_[slot];
     if (pending.generation != slot->generation || pending.failures.empty()) continue;
     v1::ReportFailuresRequest request;
     request.set_session_id(slot->stream->opened().session_id());
+    request.set_discriminator(discriminator);
     for (v1::ClipFailure& failure : pending.failures) *request.add_failures() = std::move(failure);
     pending.failures.clear();
     auto state = slot->client->ReportFailures(request);

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -13,6 +14,7 @@
 #include <torch/torch.h>
 
 #include "learner/amp_discriminator.h"
+#include "learner/amp_loss.h"
 #include "learner/critic.h"
 #include "learner/model_config.h"
 #include "learner/modskill_policy.h"
@@ -23,6 +25,7 @@
 #include "server/core/env_spec.h"
 #include "server/core/humanoid_model.h"
 #include "server/core/humanoid_spec.h"
+#include "server/service/discriminator_scorer.h"
 #include "server/core/part_layout.h"
 #include "server/core/physics_options.h"
 #include "server/service/policy_checkpoint.h"
@@ -305,6 +308,35 @@ TEST(LearnerNetworksTest, ExportRejectsAMismatchedSpec) {
   RunningMeanStd small_norm(10);
   EXPECT_THAT(ExportPolicy(policy, small_norm, SpecOf("5part"), TmpPath("unused.pt")).message(),
               HasSubstr("obs_norm"));
+}
+
+// The discriminator as the server's plausibility scorer: the AMP reward of normalized input, as
+// the trainer computes it; the server side loads it and scores clips with it.
+TEST(LearnerNetworksTest, ExportedDiscriminatorScorerIsTheAmpReward) {
+  torch::manual_seed(9);
+  const int64_t width = 2320;
+  AmpDiscriminator discriminator(width, std::vector<int64_t>{64, 32});
+  RunningMeanStd norm(width);
+  norm->Update(torch::randn({64, width}) * 2 + 0.5);
+  auto bytes = ExportDiscriminatorScorer(*discriminator, *norm);
+  ASSERT_TRUE(bytes.ok()) << bytes.status();
+  std::istringstream in(*bytes, std::ios::binary);
+  torch::jit::Module module = torch::jit::load(in);
+  const torch::Tensor x = torch::randn({16, width}) * 3;
+  const torch::Tensor expected = AmpReward(discriminator->forward(norm->Normalize(x))).reshape({-1});
+  const torch::Tensor scored = module.forward({x}).toTensor();
+  ASSERT_EQ(scored.sizes(), expected.sizes());
+  EXPECT_LT((scored - expected).abs().max().item<float>(), 1e-5);
+  EXPECT_GE(scored.min().item<float>(), 0.f);
+  EXPECT_LE(scored.max().item<float>(), 1.f);
+
+  auto scorer = DiscriminatorScorer::LoadBytes(*bytes, width);
+  ASSERT_TRUE(scorer.ok()) << scorer.status();
+  EXPECT_EQ(DiscriminatorScorer::LoadBytes(*bytes, width + 1).status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(std::string(DiscriminatorScorer::LoadBytes("not torchscript", width).status().message()),
+              HasSubstr("discriminator"));
+  RunningMeanStd wrong(10);
+  EXPECT_FALSE(ExportDiscriminatorScorer(*discriminator, *wrong).ok());
 }
 
 // (7) The ablations: one whole-body controller; no attention.

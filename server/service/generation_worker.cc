@@ -4,9 +4,15 @@
 
 #include "absl/strings/str_cat.h"
 #include "server/core/clip_file.h"
+#include "server/service/discriminator_scorer.h"
 #include "server/service/server_log.h"
 
 namespace modskill {
+namespace {
+
+constexpr int kDiscriminatorFrames = 30;
+
+}  // namespace
 
 GenerationWorker::GenerationWorker(const HumanoidSpec* spec, std::unique_ptr<ExternalMotionGenerator> external,
                                    const PlausibilityOptions& filter, std::string save_dir, int max_queued)
@@ -94,9 +100,24 @@ void GenerationWorker::RunRound(SimulationSession& session, const GenerationRequ
       candidates = std::vector<MotionVariant>();
     }
   }
+  // With the learner's discriminator, ModSkill's rule too: a mean score >= 0.5 on 30 random frames.
+  const std::shared_ptr<const DiscriminatorScorer> discriminator = session.discriminator();
   std::vector<MotionVariant> accepted;
-  for (MotionVariant& variant : *candidates) {
-    const PlausibilityVerdict verdict = CheckVariantPlausibility(*spec_, variant.clip, parent, filter_);
+  for (size_t k = 0; k < candidates->size(); ++k) {
+    MotionVariant& variant = (*candidates)[k];
+    std::vector<float> scores;
+    if (discriminator != nullptr) {
+      auto scored = discriminator->ScoreClip(session.batch->spec(), variant.clip, kDiscriminatorFrames,
+                                             request.seed + k);
+      if (scored.ok()) {
+        scores = *std::move(scored);
+      } else {
+        LogLine("session %s: could not score '%s': %s", session.id, variant.clip.name, scored.status().ToString());
+      }
+    }
+    // A failed scoring leaves `scores` empty, which the discriminator check rejects.
+    const PlausibilityVerdict verdict = CheckVariantPlausibility(*spec_, variant.clip, parent, filter_,
+                                                                 discriminator != nullptr ? &scores : nullptr);
     if (verdict.accepted) {
       accepted.push_back(std::move(variant));
       continue;

@@ -10,6 +10,7 @@
 #include "absl/time/clock.h"
 #include "server/core/clip_file.h"
 #include "server/core/motion_import.h"
+#include "server/service/discriminator_scorer.h"
 #include "server/service/policy_checkpoint.h"
 #include "server/service/proto_conversions.h"
 #include "server/service/server_log.h"
@@ -322,6 +323,11 @@ grpc::Status SimulationService::ReportFailures(grpc::ServerContext* context, con
     reports.push_back(NamedClipReport{failure.clip(), failure.frame(),
                                       {failure.part_errors().begin(), failure.part_errors().end()},
                                       failure.terminated()});
+  }
+  if (!request->discriminator().empty()) {
+    auto scorer = DiscriminatorScorer::LoadBytes(request->discriminator(), session->batch->spec().amp_obs_size);
+    if (!scorer.ok()) return ToGrpcStatus(scorer.status());
+    session->SetDiscriminator(*std::move(scorer));
   }
   auto rounds = session->RecordReports(reports);
   if (!rounds.ok()) return ToGrpcStatus(rounds.status());

@@ -131,6 +131,16 @@ bool SimulationSession::TakePending(std::vector<double>* weights, std::optional<
   return true;
 }
 
+void SimulationSession::SetDiscriminator(std::shared_ptr<const DiscriminatorScorer> scorer) {
+  absl::MutexLock lock(&mutex);
+  discriminator_ = std::move(scorer);
+}
+
+std::shared_ptr<const DiscriminatorScorer> SimulationSession::discriminator() const {
+  absl::MutexLock lock(&mutex);
+  return discriminator_;
+}
+
 std::shared_ptr<const ReferenceAmpFrames> SimulationSession::reference_amp() const {
   absl::MutexLock lock(&mutex);
   return reference_amp_;

@@ -22,6 +22,8 @@
 
 namespace modskill {
 
+class DiscriminatorScorer;
+
 // What the generation worker did for a session (GenerationStats on the wire).
 struct GenerationCounters {
   int64_t requests = 0;
@@ -79,6 +81,10 @@ class SimulationSession {
   bool TakePending(std::vector<double>* weights, std::optional<PendingMotionSet>* motion_set)
       ABSL_LOCKS_EXCLUDED(mutex);
 
+  // The learner's latest discriminator (ReportFailuresRequest.discriminator); null until one came.
+  void SetDiscriminator(std::shared_ptr<const DiscriminatorScorer> scorer) ABSL_LOCKS_EXCLUDED(mutex);
+  std::shared_ptr<const DiscriminatorScorer> discriminator() const ABSL_LOCKS_EXCLUDED(mutex);
+
   // For reference AMP samples: the frames of the committed motion set (any thread).
   std::shared_ptr<const ReferenceAmpFrames> reference_amp() const ABSL_LOCKS_EXCLUDED(mutex);
 
@@ -103,6 +109,7 @@ class SimulationSession {
   void PublishWeights() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mutex);
 
   std::shared_ptr<const ReferenceAmpFrames> reference_amp_ ABSL_GUARDED_BY(mutex);
+  std::shared_ptr<const DiscriminatorScorer> discriminator_ ABSL_GUARDED_BY(mutex);
   std::vector<double> pending_weights_ ABSL_GUARDED_BY(mutex);
   std::optional<PendingMotionSet> pending_motion_set_ ABSL_GUARDED_BY(mutex);
   std::atomic<bool> pending_{false};
