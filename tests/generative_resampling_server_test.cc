@@ -65,6 +65,19 @@ TEST(SessionMotionSetTest, RoundsComeAfterEnoughFailuresAndAlternatePartAndWhole
   EXPECT_NE(rounds[0].seed, first_seed);
 }
 
+TEST(SessionMotionSetTest, TheDefaultCapIsTheNumberOfOriginalClips) {
+  GenerationOptions options;
+  ASSERT_EQ(options.max_generated_clips, -1);
+  EXPECT_TRUE(ValidateGenerationOptions(options).ok());
+  SessionMotionSet set(TwoClips(), kParts, options, 1);
+  EXPECT_EQ(set.options().max_generated_clips, 2);
+  const MotionClip& walk = set.library()->clip(0);
+  set.Commit("deepmimic_walk", {FakeVariant(walk, 4), FakeVariant(walk, 4), FakeVariant(walk, 4)}, {1, 1});
+  EXPECT_EQ(set.live_generated(), 2);
+  options.max_generated_clips = -2;
+  EXPECT_THAT(std::string(ValidateGenerationOptions(options).message()), HasSubstr("--max_generated_clips"));
+}
+
 TEST(SessionMotionSetTest, NoRoundsWhenDisabledOrCappedAtZero) {
   GenerationOptions options;
   options.failures_per_round = 1;

@@ -13,9 +13,9 @@ absl::Status ValidateGenerationOptions(const GenerationOptions& options) {
     return absl::InvalidArgumentError(
         absl::StrCat("--variants_per_failure: ", options.variants_per_round, " outside [1, 64]"));
   }
-  if (options.max_generated_clips < 0 || options.max_generated_clips > 100000) {
+  if (options.max_generated_clips < -1 || options.max_generated_clips > 100000) {
     return absl::InvalidArgumentError(
-        absl::StrCat("--max_generated_clips: ", options.max_generated_clips, " outside [0, 100000]"));
+        absl::StrCat("--max_generated_clips: ", options.max_generated_clips, " outside [-1, 100000]"));
   }
   if (options.failures_per_round < 1) {
     return absl::InvalidArgumentError(
@@ -31,6 +31,7 @@ SessionMotionSet::SessionMotionSet(std::shared_ptr<const MotionLibrary> original
       num_originals_(originals->size()),
       part_names_(std::move(part_names)),
       library_(std::move(originals)) {
+  if (options_.max_generated_clips < 0) options_.max_generated_clips = num_originals_;
   for (int c = 0; c < num_originals_; ++c) {
     slots_.push_back(SessionClipInfo{c, library_->clip(c).name, std::nullopt});
     clips_.push_back(library_->shared_clip(c));

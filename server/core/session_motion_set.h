@@ -38,7 +38,9 @@ namespace modskill {
 struct GenerationOptions {
   bool enabled = true;          // false: the --no_generative ablation; PlanRounds never asks
   int variants_per_round = 3;   // N in ModSkill, [1, 64]
-  int max_generated_clips = 64; // live generated clips per session, [0, 100000]
+  // Live generated clips per session, [0, 100000]; -1: as many as the session has original clips,
+  // so that the original motions keep at least half of the clips however small the library.
+  int max_generated_clips = -1;
   int failures_per_round = 200; // terminated reports on a clip between two of its rounds, >= 1
 };
 
@@ -75,7 +77,7 @@ class SessionMotionSet {
   SessionMotionSet(std::shared_ptr<const MotionLibrary> originals, std::vector<std::string> part_names,
                    const GenerationOptions& options, uint64_t seed);
 
-  const GenerationOptions& options() const { return options_; }
+  const GenerationOptions& options() const { return options_; }  // max_generated_clips resolved
   int size() const { return library_->size(); }
   int num_originals() const { return num_originals_; }
   std::shared_ptr<const MotionLibrary> library() const { return library_; }

@@ -39,8 +39,9 @@ ABSL_FLAG(double, sampling_floor, modskill::kDefaultSamplingFloor,
           "share of the probability spread uniformly: every clip keeps >= sampling_floor / clips (0 .. 1)");
 ABSL_FLAG(bool, no_generative, false, "ablation: never generate variants of failed clips");
 ABSL_FLAG(int, variants_per_failure, 3, "clips generated per round for a failed clip (N in ModSkill), 1 .. 64");
-ABSL_FLAG(int, max_generated_clips, 64,
-          "generated clips a session keeps at most; the least sampled (then oldest) leave first");
+ABSL_FLAG(int, max_generated_clips, -1,
+          "generated clips a session keeps at most (-1: as many as its original clips); the least sampled "
+          "(then oldest) leave first");
 ABSL_FLAG(int, failures_per_round, 200,
           "terminated episodes a clip collects between two of its generation rounds (the paper: a round every 2e8 steps)");
 ABSL_FLAG(std::string, generator, "",
@@ -125,7 +126,9 @@ int main(int argc, char** argv) {
           options.service.threads_per_session, SamplingSchemeName(options.service.sampling),
           options.service.sampling_floor,
           !generation.enabled ? std::string("off")
-          : absl::StrCat(generation.variants_per_round, " variants per round, cap ", generation.max_generated_clips,
+          : absl::StrCat(generation.variants_per_round, " variants per round, cap ",
+                         generation.max_generated_clips < 0 ? std::string("= the session's clips")
+                                                            : absl::StrCat(generation.max_generated_clips),
                          options.service.generator_address.empty()
                              ? std::string(", built-in generator")
                              : absl::StrCat(", generator ", options.service.generator_address)));
