@@ -48,57 +48,64 @@ std::optional<PlausibilityVerdict> CheckJointLimits(const HumanoidSpec& spec, co
                                 body.range_low[axis], body.range_high[axis], worst, slack_used, worst_frame));
 }
 
-std::optional<PlausibilityVerdict> CheckPenetration(const HumanoidSpec& spec, const MotionClip& clip,
-                                                    double max_penetration) {
-  double lowest = -max_penetration;
-  int lowest_frame = -1, lowest_body = -1;
+// Where a per-body, per-frame quantity is largest, if it exceeds `above` anywhere: the first
+// place it reaches its maximum, or the last non-finite value (taken as infinite); body -1 when
+// it never exceeds `above`.
+struct Extreme {
+  double value;
+  int frame = -1;
+  int body = -1;
+};
+
+// Depth below the floor of the lowest geometry point, over bodies and frames.
+Extreme DeepestPoint(const HumanoidSpec& spec, const MotionClip& clip, double above) {
+  Extreme deepest{above};
   for (int f = 0; f < clip.num_frames; ++f) {
     for (int b = 0; b < clip.num_bodies; ++b) {
-      const int i = f * clip.num_bodies + b;
-      const double bottom = spec.body(b).geom.LowestPoint(clip.body_pos[i], clip.body_rot[i]);
-      if (bottom < lowest || !std::isfinite(bottom)) {
-        lowest = std::isfinite(bottom) ? bottom : -std::numeric_limits<double>::infinity();
-        lowest_frame = f;
-        lowest_body = b;
+      const double depth = -BodyGeomBottom(spec, clip, f, b);
+      if (depth > deepest.value || !std::isfinite(depth)) {
+        deepest = {std::isfinite(depth) ? depth : std::numeric_limits<double>::infinity(), f, b};
       }
     }
   }
-  if (lowest_body < 0) return std::nullopt;
-  return Reject(absl::StrFormat("penetration: %s reaches %.3f m below the floor (> %.3f) at frame %d",
-                                spec.body(lowest_body).name, -lowest, max_penetration, lowest_frame));
+  return deepest;
 }
 
-std::optional<PlausibilityVerdict> CheckBodySpeed(const HumanoidSpec& spec, const MotionClip& clip, double max_speed) {
-  double fastest = max_speed;
-  int fastest_frame = -1, fastest_body = -1;
+// Frame-to-frame speed |body_pos[f + 1] - body_pos[f]| * fps, over bodies and frames f.
+Extreme FastestMove(const MotionClip& clip, double above) {
+  Extreme fastest{above};
   for (int f = 0; f + 1 < clip.num_frames; ++f) {
     for (int b = 0; b < clip.num_bodies; ++b) {
       const double speed =
           (clip.body_pos[(f + 1) * clip.num_bodies + b] - clip.body_pos[f * clip.num_bodies + b]).norm() * clip.fps;
-      if (speed > fastest || !std::isfinite(speed)) {
-        fastest = std::isfinite(speed) ? speed : std::numeric_limits<double>::infinity();
-        fastest_frame = f;
-        fastest_body = b;
+      if (speed > fastest.value || !std::isfinite(speed)) {
+        fastest = {std::isfinite(speed) ? speed : std::numeric_limits<double>::infinity(), f, b};
       }
     }
   }
-  if (fastest_body < 0) return std::nullopt;
-  return Reject(absl::StrFormat("body_speed: %s moves at %.2f m/s (> %.2f) between frames %d and %d",
-                                spec.body(fastest_body).name, fastest, max_speed, fastest_frame, fastest_frame + 1));
+  return fastest;
 }
 
-std::optional<PlausibilityVerdict> CheckFootSkate(const HumanoidSpec& spec, const MotionClip& clip,
-                                                  double max_skate) {
+// One foot's horizontal speed over the frames where its geometry touches the floor.
+struct FootSkate {
+  int body;
+  double median;
+  int contact_frames;
+  double fastest;
+  int fastest_frame;
+};
+
+// Every foot that touches the floor at least once, in FootBodies order.
+std::vector<FootSkate> FootSkates(const HumanoidSpec& spec, const MotionClip& clip) {
+  std::vector<FootSkate> feet;
   std::vector<double> speeds;
   for (int b : FootBodies(spec)) {
-    const std::string& name = spec.body(b).name;
     speeds.clear();
     int fastest_frame = -1;
     double fastest = -1;
     for (int f = 0; f < clip.num_frames; ++f) {
-      const int i = f * clip.num_bodies + b;
-      if (spec.body(b).geom.LowestPoint(clip.body_pos[i], clip.body_rot[i]) >= kFootContactHeight) continue;
-      const double speed = clip.body_vel[i].head<2>().norm();
+      if (BodyGeomBottom(spec, clip, f, b) >= kFootContactHeight) continue;
+      const double speed = clip.body_vel[f * clip.num_bodies + b].head<2>().norm();
       speeds.push_back(speed);
       if (speed > fastest) {
         fastest = speed;
@@ -108,12 +115,35 @@ std::optional<PlausibilityVerdict> CheckFootSkate(const HumanoidSpec& spec, cons
     if (speeds.empty()) continue;
     const size_t mid = speeds.size() / 2;
     std::nth_element(speeds.begin(), speeds.begin() + mid, speeds.end());
-    const double median = speeds[mid];
-    if (median > max_skate) {
+    feet.push_back({b, speeds[mid], static_cast<int>(speeds.size()), fastest, fastest_frame});
+  }
+  return feet;
+}
+
+std::optional<PlausibilityVerdict> CheckPenetration(const HumanoidSpec& spec, const MotionClip& clip,
+                                                    double max_penetration) {
+  const Extreme deepest = DeepestPoint(spec, clip, max_penetration);
+  if (deepest.body < 0) return std::nullopt;
+  return Reject(absl::StrFormat("penetration: %s reaches %.3f m below the floor (> %.3f) at frame %d",
+                                spec.body(deepest.body).name, deepest.value, max_penetration, deepest.frame));
+}
+
+std::optional<PlausibilityVerdict> CheckBodySpeed(const HumanoidSpec& spec, const MotionClip& clip, double max_speed) {
+  const Extreme fastest = FastestMove(clip, max_speed);
+  if (fastest.body < 0) return std::nullopt;
+  return Reject(absl::StrFormat("body_speed: %s moves at %.2f m/s (> %.2f) between frames %d and %d",
+                                spec.body(fastest.body).name, fastest.value, max_speed, fastest.frame,
+                                fastest.frame + 1));
+}
+
+std::optional<PlausibilityVerdict> CheckFootSkate(const HumanoidSpec& spec, const MotionClip& clip,
+                                                  double max_skate) {
+  for (const FootSkate& foot : FootSkates(spec, clip)) {
+    if (foot.median > max_skate) {
       return Reject(absl::StrFormat(
           "foot_skate: %s slides at a median %.2f m/s (> %.2f) over its %d contact frames, "
           "fastest %.2f m/s at frame %d",
-          name, median, max_skate, static_cast<int>(speeds.size()), fastest, fastest_frame));
+          spec.body(foot.body).name, foot.median, max_skate, foot.contact_frames, foot.fastest, foot.fastest_frame));
     }
   }
   return std::nullopt;
@@ -122,38 +152,8 @@ std::optional<PlausibilityVerdict> CheckFootSkate(const HumanoidSpec& spec, cons
 // The largest median contact-frame speed over the feet (0 when no foot touches the floor).
 double WorstFootSkate(const HumanoidSpec& spec, const MotionClip& clip) {
   double worst = 0;
-  std::vector<double> speeds;
-  for (int b : FootBodies(spec)) {
-    speeds.clear();
-    for (int f = 0; f < clip.num_frames; ++f) {
-      const int i = f * clip.num_bodies + b;
-      if (spec.body(b).geom.LowestPoint(clip.body_pos[i], clip.body_rot[i]) >= kFootContactHeight) continue;
-      speeds.push_back(clip.body_vel[i].head<2>().norm());
-    }
-    if (speeds.empty()) continue;
-    std::nth_element(speeds.begin(), speeds.begin() + speeds.size() / 2, speeds.end());
-    worst = std::max(worst, speeds[speeds.size() / 2]);
-  }
+  for (const FootSkate& foot : FootSkates(spec, clip)) worst = std::max(worst, foot.median);
   return worst;
-}
-
-double DeepestPenetration(const HumanoidSpec& spec, const MotionClip& clip) {
-  double deepest = 0;
-  for (int f = 0; f < clip.num_frames; ++f) {
-    for (int b = 0; b < clip.num_bodies; ++b) deepest = std::max(deepest, -BodyGeomBottom(spec, clip, f, b));
-  }
-  return deepest;
-}
-
-double FastestBody(const MotionClip& clip) {
-  double fastest = 0;
-  for (int f = 0; f + 1 < clip.num_frames; ++f) {
-    for (int b = 0; b < clip.num_bodies; ++b) {
-      fastest = std::max(fastest, (clip.body_pos[(f + 1) * clip.num_bodies + b] - clip.body_pos[f * clip.num_bodies + b])
-                                          .norm() * clip.fps);
-    }
-  }
-  return fastest;
 }
 
 // The clip itself, or a copy with its kinematics computed; null (with *reason) when it cannot be.
@@ -255,8 +255,8 @@ PlausibilityVerdict CheckVariantPlausibility(const HumanoidSpec& spec, const Mot
     hinge_slack[h] = std::min(parent_violation, 10.0) + options.max_limit_violation;
   }
   PlausibilityOptions relative = options;
-  relative.max_penetration = std::max(options.max_penetration, DeepestPenetration(spec, *reference) + 0.01);
-  relative.max_body_speed = std::max(options.max_body_speed, 1.25 * FastestBody(*reference));
+  relative.max_penetration = std::max(options.max_penetration, DeepestPoint(spec, *reference, 0.0).value + 0.01);
+  relative.max_body_speed = std::max(options.max_body_speed, 1.25 * FastestMove(*reference, 0.0).value);
   relative.max_foot_skate = std::max(options.max_foot_skate, 1.25 * WorstFootSkate(spec, *reference));
   return RunChecks(spec, *checked, relative, hinge_slack, discriminator_scores);
 }
