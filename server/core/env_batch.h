@@ -61,7 +61,6 @@ class EnvBatch {
   std::shared_ptr<const MotionLibrary> shared_motions() const { return context_.motions; }
   const ReferenceAmpFrames& reference_amp() const { return *context_.reference_amp; }
   std::shared_ptr<const ReferenceAmpFrames> shared_reference_amp() const { return context_.reference_amp; }
-  const std::vector<int>& clip_ids() const { return context_.clip_ids; }
   int num_envs() const { return static_cast<int>(envs_.size()); }
   int num_threads() const { return pool_->num_threads(); }
   TrackingEnv& env(int i) { return *envs_[i]; }

@@ -10,6 +10,12 @@
 
 namespace modskill {
 
+std::vector<std::string> PartLayout::PartNames() const {
+  std::vector<std::string> names;
+  for (const BodyPart& part : parts) names.push_back(part.name);
+  return names;
+}
+
 std::vector<int> PartLayout::BodyOrder() const {
   std::vector<int> order;
   for (const BodyPart& part : parts) order.insert(order.end(), part.bodies.begin(), part.bodies.end());

@@ -24,6 +24,7 @@ struct PartLayout {
   int num_parts() const { return static_cast<int>(parts.size()); }
   // Every body once, part after part: the order of bodies in observations and actions.
   std::vector<int> BodyOrder() const;
+  std::vector<std::string> PartNames() const;
 };
 
 // Checks that every body of `spec` appears in exactly one part.

@@ -34,7 +34,6 @@ SessionMotionSet::SessionMotionSet(std::shared_ptr<const MotionLibrary> original
   if (options_.max_generated_clips < 0) options_.max_generated_clips = num_originals_;
   for (int c = 0; c < num_originals_; ++c) {
     slots_.push_back(SessionClipInfo{c, library_->clip(c).name, std::nullopt});
-    clips_.push_back(library_->shared_clip(c));
     added_order_.push_back(0);
     clip_ids_.push_back(c);
     slot_by_name_[library_->clip(c).name] = c;
@@ -62,7 +61,7 @@ std::vector<GenerationRequest> SessionMotionSet::PlanRounds(const std::vector<Fa
     }
     if (parent.in_flight || parent.failures_since_round < options_.failures_per_round) continue;
     GenerationRequest request;
-    request.parent = clips_[failure.slot];
+    request.parent = library_->shared_clip(failure.slot);
     request.count = options_.variants_per_round;
     request.seed = MixSeed(seed_ ^ MixSeed(static_cast<uint64_t>(failure.slot) << 20 ^ static_cast<uint64_t>(parent.rounds)));
     // Even rounds are part-level on the worst part when part errors are known, odd ones whole body.
@@ -106,13 +105,12 @@ MotionSetChange SessionMotionSet::Commit(const std::string& parent, std::vector<
   for (int s = 0; s < size(); ++s) {
     if (evict[s]) {
       change.removed_ids.push_back(slots_[s].id);
-      retired_names_[slots_[s].name] = slots_[s].id;
-      change.evicted.push_back(std::move(slots_[s]));
+      evicted_names_.insert(slots_[s].name);
       continue;
     }
     change.previous_slot.push_back(s);
     slots.push_back(std::move(slots_[s]));
-    clips.push_back(std::move(clips_[s]));
+    clips.push_back(library_->shared_clip(s));
     added_order.push_back(added_order_[s]);
   }
   ++commits_;
@@ -130,19 +128,18 @@ MotionSetChange SessionMotionSet::Commit(const std::string& parent, std::vector<
     added_order.push_back(commits_);
   }
   slots_ = std::move(slots);
-  clips_ = std::move(clips);
   added_order_ = std::move(added_order);
-  Rebuild();
+  Rebuild(clips);
   return change;
 }
 
-void SessionMotionSet::Rebuild() {
+void SessionMotionSet::Rebuild(const std::vector<std::shared_ptr<const MotionClip>>& clips) {
   auto library = std::make_shared<MotionLibrary>();
   clip_ids_.clear();
   slot_by_name_.clear();
   for (size_t s = 0; s < slots_.size(); ++s) {
     // Names are unique by construction (originals are unique; generated ones carry their id).
-    library->AddShared(clips_[s]).IgnoreError();
+    library->AddShared(clips[s]).IgnoreError();
     clip_ids_.push_back(slots_[s].id);
     slot_by_name_[slots_[s].name] = static_cast<int>(s);
   }

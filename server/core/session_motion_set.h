@@ -25,6 +25,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -66,7 +67,6 @@ struct MotionSetChange {
   std::vector<int> previous_slot;
   std::vector<SessionClipInfo> added;
   std::vector<int> removed_ids;
-  std::vector<SessionClipInfo> evicted;
 };
 
 class SessionMotionSet {
@@ -79,17 +79,15 @@ class SessionMotionSet {
 
   const GenerationOptions& options() const { return options_; }  // max_generated_clips resolved
   int size() const { return library_->size(); }
-  int num_originals() const { return num_originals_; }
   std::shared_ptr<const MotionLibrary> library() const { return library_; }
   // Slot -> id (see EnvContext::clip_ids).
   const std::vector<int>& clip_ids() const { return clip_ids_; }
   const SessionClipInfo& info(int slot) const { return slots_[slot]; }
-  bool is_generated(int slot) const { return slots_[slot].provenance.has_value(); }
   int live_generated() const { return size() - num_originals_; }
   // The slot of a clip now in the set; -1 otherwise.
   int Find(absl::string_view name) const;
   // A generated clip that has been evicted (reports on it are stale, not errors).
-  bool WasEvicted(absl::string_view name) const { return retired_names_.count(name) > 0; }
+  bool WasEvicted(absl::string_view name) const { return evicted_names_.count(name) > 0; }
   const std::vector<std::string>& part_names() const { return part_names_; }
 
   // Counts the terminated reports (slot, part errors or empty) of one ReportFailures call and
@@ -116,20 +114,20 @@ class SessionMotionSet {
     int part_error_reports = 0;
   };
 
-  void Rebuild();
+  // The library and indexes for slots_, whose clips are `clips` (by slot).
+  void Rebuild(const std::vector<std::shared_ptr<const MotionClip>>& clips);
 
   GenerationOptions options_;
   uint64_t seed_;
   int num_originals_;
   std::vector<std::string> part_names_;
   std::vector<SessionClipInfo> slots_;
-  std::vector<std::shared_ptr<const MotionClip>> clips_;  // by slot
-  std::vector<int64_t> added_order_;                      // by slot: when it joined (originals 0)
-  std::vector<int> clip_ids_;
+  std::vector<int64_t> added_order_;  // by slot: when it joined (originals 0)
+  std::vector<int> clip_ids_;         // by slot: slots_[s].id, in the form EnvBatch takes
   std::map<std::string, int, std::less<>> slot_by_name_;
-  std::map<std::string, int, std::less<>> retired_names_;  // name -> id, for Find of evicted clips
-  std::map<int, ParentState> parents_;                      // by original slot
-  std::shared_ptr<const MotionLibrary> library_;
+  std::set<std::string, std::less<>> evicted_names_;
+  std::map<int, ParentState> parents_;  // by original slot
+  std::shared_ptr<const MotionLibrary> library_;  // the clips, by slot
   int next_id_ = 0;
   int64_t commits_ = 0;
 };

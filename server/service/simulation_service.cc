@@ -247,11 +247,7 @@ grpc::Status SimulationService::Simulate(grpc::ServerContext* context,
   std::vector<float> actions;
   std::vector<double> clip_weights;  // swapped with the session's pending weights, so reused
   std::optional<PendingMotionSet> motion_set;
-  const std::vector<std::string> part_names = [&] {
-    std::vector<std::string> names;
-    for (const BodyPart& part : envs.spec().layout.parts) names.push_back(part.name);
-    return names;
-  }();
+  const std::vector<std::string> part_names = envs.spec().layout.PartNames();
   const int64_t n = envs.num_envs(), action_size = envs.spec().action_size;
   const char* ending = "client closed the stream";
   if (!stream->Write(response)) {

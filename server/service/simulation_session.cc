@@ -5,12 +5,6 @@
 namespace modskill {
 namespace {
 
-std::vector<std::string> PartNames(const PartLayout& layout) {
-  std::vector<std::string> names;
-  for (const BodyPart& part : layout.parts) names.push_back(part.name);
-  return names;
-}
-
 std::vector<std::string> ClipNames(const MotionLibrary& motions) {
   std::vector<std::string> names;
   for (int c = 0; c < motions.size(); ++c) names.push_back(motions.clip(c).name);
@@ -27,7 +21,7 @@ SimulationSession::SimulationSession(std::string session_id, std::string client,
       batch(std::move(envs)),
       clip_names(ClipNames(batch->motions())),
       opened(absl::Now()),
-      motion_set(batch->shared_motions(), PartNames(batch->spec().layout), generation, seed),
+      motion_set(batch->shared_motions(), batch->spec().layout.PartNames(), generation, seed),
       ledger(batch->motions().size(), batch->spec().layout.num_parts()),
       adaptive_sampler(batch->motions().size(), sampling, sampling_floor),
       reference_amp_(batch->shared_reference_amp()) {}
@@ -89,7 +83,7 @@ std::vector<std::shared_ptr<const MotionClip>> SimulationSession::CommitRound(co
                                   : 0.0;
   MotionSetChange change = motion_set.Commit(parent, std::move(accepted), adaptive_sampler.raw_weights());
   if (change.added.empty() && change.removed_ids.empty()) return {};
-  generation.evicted += static_cast<int64_t>(change.evicted.size());
+  generation.evicted += static_cast<int64_t>(change.removed_ids.size());
   ledger.Remap(change.previous_slot);
   adaptive_sampler.Remap(change.previous_slot, parent_count);
   reference_amp_ = std::make_shared<const ReferenceAmpFrames>(batch->spec(), *motion_set.library());
