@@ -91,9 +91,6 @@ absl::StatusOr<MotionClip> FromMotionData(const HumanoidSpec& spec, const v1::Mo
       clip.local_rot.push_back(q);
     }
   }
-  if (absl::Status status = ComputeClipKinematics(spec, &clip); !status.ok()) {
-    return absl::InvalidArgumentError(absl::StrCat(field, ": ", status.message()));
-  }
   return clip;
 }
 
@@ -157,7 +154,9 @@ absl::StatusOr<std::vector<MotionVariant>> ExternalMotionGenerator::Generate(con
         if (!mask[0]) clip->root_pos[f] = parent.root_pos[f];
       }
       clip->fps = parent.fps;
-      if (absl::Status s = ComputeClipKinematics(spec, &*clip); !s.ok()) return s;
+    }
+    if (absl::Status status = ComputeClipKinematics(spec, &*clip); !status.ok()) {
+      return absl::InvalidArgumentError(absl::StrCat(field, ": ", status.message()));
     }
     clip->label = parent.label;
     clip->humanml3d_id = parent.humanml3d_id;

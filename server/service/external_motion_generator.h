@@ -19,8 +19,9 @@ namespace modskill {
 
 // MotionClip <-> MotionData (root positions and local rotations only, as FLOAT32).
 void ToMotionData(const HumanoidSpec& spec, const MotionClip& clip, v1::MotionData* data);
-// Checks body names, shapes, finiteness and unit quaternions (renormalized within 10 %), and
-// computes the kinematics. Errors name `field` and the offending part.
+// Checks body names, shapes, finiteness and unit quaternions (renormalized within 10 %); the
+// kinematics are left to the caller (ComputeClipKinematics). Errors name `field` and the
+// offending part.
 absl::StatusOr<MotionClip> FromMotionData(const HumanoidSpec& spec, const v1::MotionData& data,
                                           const std::string& field);
 
