@@ -50,6 +50,14 @@ void EmitMlp(const MlpImpl& mlp, absl::string_view prefix, absl::string_view inp
   }
 }
 
+// Emits `x = RunningMeanStd::Normalize(input)` with the registered buffers `<stats>_mean` and
+// `<stats>_var`.
+void EmitNormalize(absl::string_view input, absl::string_view stats, std::string* source) {
+  absl::StrAppend(source, "    x = torch.clamp((", input, " - self.", stats, "_mean.to(", input, ".dtype)) / torch.sqrt(self.",
+                  stats, "_var + ", ScriptFloat(RunningMeanStdImpl::kEpsilon), ").to(", input, ".dtype), ",
+                  ScriptFloat(-RunningMeanStdImpl::kClip), ", ", ScriptFloat(RunningMeanStdImpl::kClip), ")\n");
+}
+
 void RegisterMlp(const MlpImpl& mlp, absl::string_view prefix, torch::jit::Module* module) {
   for (size_t i = 0; i < mlp.layers().size(); ++i) {
     const torch::nn::Linear& layer = mlp.layers()[i];
@@ -69,11 +77,8 @@ std::string PolicyScriptSource(const ModSkillPolicyImpl& policy) {
   const SkillAttentionImpl& attention = *policy.attention();
   const size_t num_parts = layout.parts.size();
   std::string src = "def forward(self, obs):\n";
-  absl::StrAppend(&src, "    # RunningMeanStd::Normalize\n",
-                  "    x = torch.clamp((obs - self.obs_mean.to(obs.dtype)) / torch.sqrt(self.obs_var + ",
-                  ScriptFloat(RunningMeanStdImpl::kEpsilon), ").to(obs.dtype), ",
-                  ScriptFloat(-RunningMeanStdImpl::kClip), ", ",
-                  ScriptFloat(RunningMeanStdImpl::kClip), ")\n");
+  absl::StrAppend(&src, "    # RunningMeanStd::Normalize\n");
+  EmitNormalize("obs", "obs", &src);
   // Skill attention: per part key, query, value maps.
   std::vector<std::string> keys, queries, values;
   for (size_t p = 0; p < num_parts; ++p) {
@@ -179,9 +184,7 @@ absl::StatusOr<std::string> ExportDiscriminatorScorer(AmpDiscriminatorImpl& disc
     module.register_buffer("amp_var", amp_norm.var().detach().clone());
     RegisterMlp(mlp, "discriminator", &module);
     std::string src = "def forward(self, amp_obs):\n";
-    absl::StrAppend(&src, "    x = torch.clamp((amp_obs - self.amp_mean.to(amp_obs.dtype)) / torch.sqrt(self.amp_var + ",
-                    ScriptFloat(RunningMeanStdImpl::kEpsilon), ").to(amp_obs.dtype), ",
-                    ScriptFloat(-RunningMeanStdImpl::kClip), ", ", ScriptFloat(RunningMeanStdImpl::kClip), ")\n");
+    EmitNormalize("amp_obs", "amp", &src);
     EmitMlp(mlp, "discriminator", "x", "logit", &src);
     absl::StrAppend(&src, "    logit = logit.reshape([-1])\n",
                     "    return torch.clamp(1.0 - 0.25 * (logit - 1.0) * (logit - 1.0), 0.0, 1.0)\n");
