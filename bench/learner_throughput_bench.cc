@@ -27,6 +27,12 @@
 ABSL_FLAG(int, repeats, 5, "timed repetitions per measurement (median reported)");
 ABSL_FLAG(int, iterations, 4, "trainer iterations for the end-to-end measurement");
 ABSL_FLAG(bool, paper, true, "also measure the paper preset");
+ABSL_FLAG(int, epochs, 0, "PPO epochs for the end-to-end measurement (0: the small preset's)");
+ABSL_FLAG(int, discriminator_epochs, 0, "discriminator epochs for the end-to-end measurement (0: the preset's)");
+ABSL_FLAG(int, minibatch_size, 0, "PPO minibatch for the end-to-end measurement (0: the small preset's)");
+ABSL_FLAG(int, update_threads, -1, "torch threads for the updates (-1: the small preset's)");
+ABSL_FLAG(double, amp_reward_weight, -1, "AMP reward weight (-1: the small preset's)");
+ABSL_FLAG(bool, networks, true, "measure the networks alone");
 
 namespace modskill::learner {
 namespace {
@@ -59,7 +65,7 @@ void NetworkThroughput(const std::string& preset, const NetworkLayout& layout) {
   for (const auto& p : critic->parameters()) parameters.push_back(p);
   torch::optim::Adam adam(parameters, torch::optim::AdamOptions(1e-4));
   const int repeats = absl::GetFlag(FLAGS_repeats);
-  for (int batch : {256, 2048}) {
+  for (int batch : {256, 2048, 4096}) {
     const torch::Tensor obs = torch::randn({batch, layout.obs_size});
     const double inference = SamplesPerSecond(batch, repeats, [&] {
       torch::NoGradGuard no_grad;
@@ -91,9 +97,15 @@ int Run() {
   auto humanoid = HumanoidModel::Create(*spec, PhysicsOptions());
   auto catalog = PartLayoutCatalog::LoadDefault(*spec);
   const NetworkLayout layout = LayoutFromEnvSpec(MakeEnvSpec(**humanoid, *catalog->Get("5part")));
-  std::printf("networks alone (1 torch thread, OpenBLAS when installed), medians of %d:\n", absl::GetFlag(FLAGS_repeats));
-  NetworkThroughput("small", layout);
-  if (absl::GetFlag(FLAGS_paper)) NetworkThroughput("paper", layout);
+  for (int threads : {1, 2}) {
+    if (!absl::GetFlag(FLAGS_networks)) break;
+    SetTorchThreads(threads);
+    std::printf("networks alone (%d torch thread(s), OpenBLAS when installed), medians of %d:\n", threads,
+                absl::GetFlag(FLAGS_repeats));
+    NetworkThroughput("small", layout);
+    if (absl::GetFlag(FLAGS_paper)) NetworkThroughput("paper", layout);
+  }
+  SetTorchThreads(1);
 
   auto library = MotionLibrary::LoadDefault(*spec);
   ServerOptions options;
@@ -107,8 +119,11 @@ int Run() {
   ClientOptions client_options;
   client_options.server = address;
   auto client = SimulationClient::Connect(client_options);
+  // The same action mode as the trainer's, so that both see the same episodes: zero residual
+  // actions track the reference open loop.
   v1::SessionConfig session;
   session.set_num_envs(128);
+  session.set_action_mode(TrainerConfig::ForPreset("small")->action_mode == "residual" ? v1::RESIDUAL : v1::ABSOLUTE);
   auto first = (*client)->OpenSession(session);
   auto second = (*client)->OpenSession(session);
   std::vector<float> zeros(128 * 69, 0.f);
@@ -132,6 +147,14 @@ int Run() {
   config.iterations = absl::GetFlag(FLAGS_iterations);
   config.run_dir = "/tmp/modskill-learner-bench";
   config.checkpoint_every = 1000;
+  if (absl::GetFlag(FLAGS_epochs) > 0) config.epochs = absl::GetFlag(FLAGS_epochs);
+  if (absl::GetFlag(FLAGS_discriminator_epochs) > 0) config.discriminator_epochs = absl::GetFlag(FLAGS_discriminator_epochs);
+  if (absl::GetFlag(FLAGS_minibatch_size) > 0) config.minibatch_size = absl::GetFlag(FLAGS_minibatch_size);
+  if (absl::GetFlag(FLAGS_update_threads) >= 0) config.update_threads = absl::GetFlag(FLAGS_update_threads);
+  if (absl::GetFlag(FLAGS_amp_reward_weight) >= 0) {
+    config.amp_reward_weight = absl::GetFlag(FLAGS_amp_reward_weight);
+    config.task_reward_weight = 1 - config.amp_reward_weight;
+  }
   auto trainer = Trainer::Create(config);
   if (!trainer.ok()) return std::fprintf(stderr, "error: %s\n", std::string(trainer.status().message()).c_str()), 1;
   std::vector<double> rates, collect, update;

@@ -17,3 +17,9 @@ trap 'kill -TERM $SERVER_PID 2>/dev/null; wait $SERVER_PID 2>/dev/null || true' 
 "$BUILD/learner/modskill-learner" --servers "127.0.0.1:$PORT" --run_dir "$RUN_DIR" --preset small \
     --iterations 100000 --time_budget_min "${MODSKILL_TRAIN_MIN:-5}" --envs_per_server 256 "$@"
 "$BUILD/learner/modskill-learner" --eval --checkpoint "$RUN_DIR/policy.pt" --servers "127.0.0.1:$PORT"
+# The eval table above ends with the open-loop reference baseline on the same clips; the curve:
+if /usr/bin/python3 client/python/examples/plot_learning_curve.py "$RUN_DIR/progress.csv" \
+    --out "$RUN_DIR/learning_curve.png" > /dev/null 2>&1; then
+  echo "learning curve: $RUN_DIR/learning_curve.png"
+fi
+echo "evaluation: $RUN_DIR/eval.md (policy and open-loop reference baseline)"

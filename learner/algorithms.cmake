@@ -1,10 +1,12 @@
 # The learning algorithms that do not depend on a network: GAE, PPO's loss, AMP's
-# discriminator loss and reward, and the training logs (TensorBoard event files, CSV).
+# discriminator loss and reward, the termination curriculum, and the training logs (TensorBoard
+# event files, CSV).
 add_library(modskill_learner_algo STATIC
   ${CMAKE_CURRENT_LIST_DIR}/amp_loss.cc
   ${CMAKE_CURRENT_LIST_DIR}/gae.cc
   ${CMAKE_CURRENT_LIST_DIR}/ppo_loss.cc
-  ${CMAKE_CURRENT_LIST_DIR}/tensorboard_writer.cc)
+  ${CMAKE_CURRENT_LIST_DIR}/tensorboard_writer.cc
+  ${CMAKE_CURRENT_LIST_DIR}/termination_curriculum.cc)
 target_include_directories(modskill_learner_algo PUBLIC ${CMAKE_SOURCE_DIR})
 target_link_libraries(modskill_learner_algo PUBLIC
   ${TORCH_LIBRARIES} absl::status absl::statusor absl::strings absl::str_format)

@@ -1,9 +1,12 @@
 #include "learner/evaluation.h"
 
+#include <map>
+
 #include <nlohmann/json.hpp>
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "server/service/policy_checkpoint.h"
 
 namespace modskill::learner {
 
@@ -117,6 +120,40 @@ std::string EvaluationReport::ToMarkdown(const std::string& method) const {
                           clip.steps(), clip.g_mpjpe_mm(), clip.mpjpe_mm(), clip.acc_error_mm(), clip.vel_error_mm());
   }
   return md;
+}
+
+absl::StatusOr<std::string> OpenLoopReferencePolicy(const v1::EnvSpec& spec) {
+  PolicySpec policy;
+  policy.part_layout = spec.part_layout();
+  policy.obs_size = spec.obs_size();
+  policy.action_size = spec.action_size();
+  policy.joint_names.assign(spec.joint_names().begin(), spec.joint_names().end());
+  policy.control_dt = spec.control_dt();
+  policy.action.mode = ActionMode::kResidual;
+  return AffinePolicyBytes(policy, {}, {});
+}
+
+std::string CompareWithBaseline(const EvaluationReport& policy, const EvaluationReport& baseline) {
+  std::map<std::string, const v1::ClipMetrics*> reference;
+  for (const v1::ClipMetrics& clip : baseline.clips) reference[clip.clip()] = &clip;
+  std::string out = absl::StrFormat(
+      "\nAgainst the open-loop reference (PD targets = the reference pose, no learning), same clips and protocol:\n\n"
+      "| clip | policy: steps tracked | policy: E_mpjpe (mm) | reference: steps tracked | reference: E_mpjpe (mm) |\n"
+      "|---|---|---|---|---|\n");
+  double policy_steps = 0, reference_steps = 0;
+  for (const v1::ClipMetrics& clip : policy.clips) {
+    auto it = reference.find(clip.clip());
+    if (it == reference.end()) continue;
+    policy_steps += clip.steps();
+    reference_steps += it->second->steps();
+    absl::StrAppendFormat(&out, "| %s | %d%s | %.1f | %d%s | %.1f |\n", clip.clip(), clip.steps(),
+                          clip.success() ? " (all)" : "", clip.mpjpe_mm(), it->second->steps(),
+                          it->second->success() ? " (all)" : "", it->second->mpjpe_mm());
+  }
+  absl::StrAppendFormat(&out, "| **all** (Succ, E_mpjpe) | %.0f steps, %.1f %% | %.1f | %.0f steps, %.1f %% | %.1f |\n",
+                        policy_steps, 100 * policy.success_rate, policy.mpjpe_mm, reference_steps,
+                        100 * baseline.success_rate, baseline.mpjpe_mm);
+  return out;
 }
 
 }  // namespace modskill::learner

@@ -35,6 +35,13 @@ struct EvaluationReport {
 absl::StatusOr<EvaluationReport> Evaluate(SimulationClient& client, const std::string& checkpoint_name,
                                           const std::string& checkpoint_bytes, const std::vector<std::string>& clips);
 
+// The open-loop reference baseline: a zero policy in residual mode, so every PD target is the
+// reference pose of the next frame. What a learned tracker must beat.
+absl::StatusOr<std::string> OpenLoopReferencePolicy(const v1::EnvSpec& spec);
+
+// Per clip, the steps a policy tracked and its E_mpjpe beside the baseline's (same clips).
+std::string CompareWithBaseline(const EvaluationReport& policy, const EvaluationReport& baseline);
+
 }  // namespace modskill::learner
 
 #endif  // MODSKILL_LEARNER_EVALUATION_H_

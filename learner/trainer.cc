@@ -1,5 +1,7 @@
 #include "learner/trainer.h"
 
+#include <malloc.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -44,20 +46,27 @@ bool AllFinite(const std::vector<torch::Tensor>& tensors) {
   return true;
 }
 
-// One session's share of an iteration's experience, [T, n, ...].
-struct SlotRollout {
-  SessionSlot* slot = nullptr;
-  int n = 0;
-  bool failed = false;
-  torch::Tensor obs, actions, log_prob, values, task_reward, dones, truncated, amp_next;
-  torch::Tensor next_obs;  // observation after the last step (raw)
-  std::vector<torch::Tensor> raw_obs;  // for the normalizer, after the update
-  torch::Tensor reward_terms_sum;
+// Torch's intra-op threads for one phase (the update, while the servers wait), restored after it.
+class ScopedTorchThreads {
+ public:
+  explicit ScopedTorchThreads(int threads) : previous_(at::get_num_threads()) {
+    if (threads > 0 && threads != previous_) at::set_num_threads(threads);
+  }
+  ~ScopedTorchThreads() {
+    if (at::get_num_threads() != previous_) at::set_num_threads(previous_);
+  }
+
+ private:
+  int previous_;
 };
 
 }  // namespace
 
-Trainer::Trainer(const TrainerConfig& config) : config_(config), generator_(at::detail::createCPUGenerator(config.seed)) {}
+Trainer::Trainer(const TrainerConfig& config)
+    : config_(config),
+      curriculum_(config.curriculum_start > 0 ? config.curriculum_start : config.termination_distance,
+                  config.curriculum_end > 0 ? config.curriculum_end : config.termination_distance),
+      generator_(at::detail::createCPUGenerator(config.seed)) {}
 
 absl::StatusOr<std::unique_ptr<Trainer>> Trainer::Create(const TrainerConfig& config) {
   if (absl::Status status = config.Validate(); !status.ok()) return status;
@@ -70,6 +79,10 @@ absl::StatusOr<std::unique_ptr<Trainer>> Trainer::Create(const TrainerConfig& co
   }
   std::filesystem::remove(probe, error);
   torch::manual_seed(config.seed);
+  // Every iteration allocates and frees tens of MB of rollout and AMP tensors; glibc returns such
+  // blocks to the kernel, and faulting them back in cost ~0.15 s per 100 MB. Keep them.
+  mallopt(M_MMAP_THRESHOLD, 1 << 30);
+  mallopt(M_TRIM_THRESHOLD, 1 << 30);
   std::unique_ptr<Trainer> trainer(new Trainer(config));
   ServerPoolOptions pool;
   pool.servers = config.servers;
@@ -80,6 +93,12 @@ absl::StatusOr<std::unique_ptr<Trainer>> Trainer::Create(const TrainerConfig& co
   pool.session.set_part_layout(config.part_layout);
   for (const std::string& clip : config.motions) pool.session.add_motions(clip);
   pool.session.set_termination(v1::TRAINING);
+  const bool residual = ActionModeOf(config) == ActionMode::kResidual;
+  pool.session.set_action_mode(residual ? v1::RESIDUAL : v1::ABSOLUTE);
+  if (residual) pool.session.set_residual_scale(static_cast<float>(config.residual_scale));
+  pool.session.set_termination_distance(
+      static_cast<float>(config.curriculum_start > 0 ? config.curriculum_start : config.termination_distance));
+  pool.session.set_termination_bodies(config.termination_bodies == "no_feet" ? v1::NO_FEET : v1::ALL);
   pool.session.set_amp_obs(v1::FULL);
   trainer->servers_ = std::make_unique<ServerPool>(pool);
   if (absl::Status status = trainer->WaitForServers(); !status.ok()) return status;
@@ -170,6 +189,28 @@ absl::Status Trainer::Run(const std::function<void(const IterationStats&)>& on_i
   return absl::OkStatus();
 }
 
+// One session's share of an iteration's experience, [T, n, ...].
+struct Trainer::SlotRollout {
+  SessionSlot* slot = nullptr;
+  int n = 0;
+  bool failed = false;
+  torch::Tensor obs, actions, log_prob, values, task_reward, dones, truncated, amp_next;
+  torch::Tensor next_obs;  // observation after the last step (raw)
+  std::vector<torch::Tensor> raw_obs;  // for the normalizer, after the update
+  torch::Tensor reward_terms_sum;
+};
+
+// The iteration's experience from every usable session, flattened to [T * N, ...].
+struct Trainer::TrainingBatch {
+  torch::Tensor obs;  // normalized with the statistics of the iteration's start
+  torch::Tensor actions, old_log_prob, old_values, advantages, returns;
+  torch::Tensor raw_obs;      // for the normalizer
+  torch::Tensor policy_amp;   // AMP observations of live (not ended) rows
+  double task_sum = 0, amp_sum = 0, samples = 0;
+  torch::Tensor terms_sum;
+  int live_sessions = 0;
+};
+
 absl::StatusOr<IterationStats> Trainer::Iterate() {
   IterationStats stats;
   const auto start = Clock::now();
@@ -177,12 +218,37 @@ absl::StatusOr<IterationStats> Trainer::Iterate() {
   if (servers_->Alive().empty()) {
     if (absl::Status status = WaitForServers(); !status.ok()) return status;
   }
+  stats.termination_distance = curriculum_.distance();
+  std::vector<SlotRollout> rollouts = Collect();
+  std::vector<SlotRollout*> usable;
+  for (SlotRollout& r : rollouts) {
+    if (!r.failed) usable.push_back(&r);
+  }
+  stats.collect_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  if (usable.empty()) {
+    // Every server failed during this iteration: nothing to learn from; try again.
+    stats.iteration = iteration_;
+    stats.env_steps = env_steps_;
+    LogLine("iteration %d: every session failed while collecting; retrying", iteration_ + 1);
+    return stats;
+  }
+  const TrainingBatch batch = ComputeReturns(usable);
+  const auto update_start = Clock::now();
+  UpdatePolicy(batch, &stats);
+  UpdateDiscriminator(batch, usable.front()->slot, &stats);
+  ++iteration_;
+  env_steps_ += static_cast<int64_t>(batch.samples);
+  if (config_.report_every > 0 && iteration_ % config_.report_every == 0) ReportFailures();
+
+  stats.update_seconds = std::chrono::duration<double>(Clock::now() - update_start).count();
+  stats.env_steps_per_second = batch.samples / std::chrono::duration<double>(Clock::now() - start).count();
+  Summarize(batch, &stats);
+  return stats;
+}
+
+std::vector<Trainer::SlotRollout> Trainer::Collect() {
   const int T = config_.horizon;
   const int64_t O = layout_.obs_size, A = layout_.action_size, M = layout_.amp_obs_size;
-  const int64_t terms = spec_.reward_terms_size();
-  torch::Tensor log_std = policy_->log_std();
-  const torch::Tensor std_dev = log_std.exp();
-
   std::vector<SlotRollout> rollouts;
   for (SessionSlot* slot : servers_->Alive()) {
     SlotRollout r;
@@ -196,54 +262,33 @@ absl::StatusOr<IterationStats> Trainer::Iterate() {
     r.dones = torch::zeros({T, r.n});
     r.truncated = torch::zeros({T, r.n});
     r.amp_next = torch::zeros({T, r.n, M});
-    r.reward_terms_sum = torch::zeros({terms}, torch::kFloat64);
+    r.reward_terms_sum = torch::zeros({spec_.reward_terms_size()}, torch::kFloat64);
+    // Every action message carries the distance, so a session that reopens gets it too.
+    slot->stream->SetTerminationDistance(static_cast<float>(curriculum_.distance()));
     rollouts.push_back(std::move(r));
   }
-  // Where each slot's envs are: the last result, or the first observation of a new session.
-  auto current_obs = [&](SessionSlot* slot) {
-    const bool fresh = slot->stream->opened().initial().step() == 0 && slot->stream->result().obs().data().empty();
-    const v1::StepResult& result = fresh ? slot->stream->opened().initial() : slot->stream->result();
-    return ToTorch(result.obs(), {slot->num_envs(), O});
-  };
-  // Samples actions for `obs` into step t of `r` and sends them.
-  // Observations are normalized with the statistics of the iteration's start and stored
-  // normalized, so that PPO's ratios compare the same inputs; the statistics absorb the
-  // iteration's observations after the update. (With sigma = exp(-2.9), drifting inputs
-  // alone would move log-probabilities by tens of nats.)
-  auto act = [&](SlotRollout& r, int t, const torch::Tensor& obs) -> absl::Status {
-    torch::NoGradGuard no_grad;
-    const torch::Tensor normalized = obs_norm_->Normalize(obs);
-    r.raw_obs.push_back(obs);
-    const torch::Tensor mean = policy_->forward(normalized);
-    const torch::Tensor action = mean + std_dev * torch::randn(mean.sizes(), generator_);
-    r.obs[t].copy_(normalized);
-    r.actions[t].copy_(action);
-    r.log_prob[t].copy_(ModSkillPolicyImpl::LogProb(mean, log_std, action));
-    r.values[t].copy_(critic_->forward(normalized));
-    const torch::Tensor contiguous = action.contiguous();
-    return r.slot->stream->SendActions(contiguous.data_ptr<float>());
-  };
   auto fail = [&](SlotRollout& r, const absl::Status& status) {
     r.failed = true;
     servers_->MarkDead(r.slot, status);
   };
-
+  for (size_t i = 0; i < servers_->slots().size(); ++i) slot_index_[servers_->slots()[i].get()] = i;
   if (episode_return_.size() < servers_->slots().size()) {
     episode_return_.resize(servers_->slots().size());
     episode_length_.resize(servers_->slots().size());
   }
-  std::unordered_map<SessionSlot*, size_t> slot_index;
-  for (size_t i = 0; i < servers_->slots().size(); ++i) slot_index[servers_->slots()[i].get()] = i;
   for (SlotRollout& r : rollouts) {
-    auto& returns = episode_return_[slot_index[r.slot]];
-    auto& lengths = episode_length_[slot_index[r.slot]];
+    auto& returns = episode_return_[slot_index_[r.slot]];
+    auto& lengths = episode_length_[slot_index_[r.slot]];
     if (returns.size() != static_cast<size_t>(r.n)) {
       returns.assign(r.n, 0.0);
       lengths.assign(r.n, 0);
     }
-    if (absl::Status status = act(r, 0, current_obs(r.slot)); !status.ok()) fail(r, status);
+    // Where the slot's envs are: the last result, or the first observation of a new session.
+    const SimulationStream& stream = *r.slot->stream;
+    const bool fresh = stream.opened().initial().step() == 0 && stream.result().obs().data().empty();
+    const v1::StepResult& result = fresh ? stream.opened().initial() : stream.result();
+    if (absl::Status status = Act(r, 0, ToTorch(result.obs(), {r.n, O})); !status.ok()) fail(r, status);
   }
-  // Round robin: while one session's server steps, the learner computes another's actions.
   for (int t = 0; t < T; ++t) {
     for (SlotRollout& r : rollouts) {
       if (r.failed) continue;
@@ -251,32 +296,10 @@ absl::StatusOr<IterationStats> Trainer::Iterate() {
         fail(r, status);
         continue;
       }
-      const v1::StepResult& result = r.slot->stream->result();
-      const torch::Tensor reward = ToTorch(result.reward(), {r.n});
-      const torch::Tensor done = ToTorch(result.done(), {r.n});
-      r.task_reward[t].copy_(reward);
-      r.dones[t].copy_(done);
-      r.truncated[t].copy_(ToTorch(result.truncated(), {r.n}));
-      r.amp_next[t].copy_(ToTorch(result.amp_obs(), {r.n, M}));
-      r.reward_terms_sum += ToTorch(result.reward_terms(), {r.n, terms}).to(torch::kFloat64).sum(0);
-      auto& returns = episode_return_[slot_index[r.slot]];
-      auto& lengths = episode_length_[slot_index[r.slot]];
-      const float* reward_data = reward.data_ptr<float>();
-      const float* done_data = done.data_ptr<float>();
-      for (int i = 0; i < r.n; ++i) {
-        returns[i] += reward_data[i];
-        ++lengths[i];
-        if (done_data[i] > 0.5f) {
-          recent_returns_.push_back(returns[i]);
-          recent_lengths_.push_back(lengths[i]);
-          returns[i] = 0;
-          lengths[i] = 0;
-        }
-      }
-      RecordEpisodeEnds(r.slot, result);
-      const torch::Tensor next = ToTorch(result.obs(), {r.n, O});
+      RecordStep(r, t);
+      const torch::Tensor next = ToTorch(r.slot->stream->result().obs(), {r.n, O});
       if (t + 1 < T) {
-        if (absl::Status status = act(r, t + 1, next); !status.ok()) fail(r, status);
+        if (absl::Status status = Act(r, t + 1, next); !status.ok()) fail(r, status);
       } else {
         r.next_obs = next;
       }
@@ -286,79 +309,129 @@ absl::StatusOr<IterationStats> Trainer::Iterate() {
   if (recent_returns_.size() > keep) {
     recent_returns_.erase(recent_returns_.begin(), recent_returns_.end() - keep);
     recent_lengths_.erase(recent_lengths_.begin(), recent_lengths_.end() - keep);
+    recent_tracked_.erase(recent_tracked_.begin(), recent_tracked_.end() - keep);
   }
-  std::vector<SlotRollout*> usable;
-  for (SlotRollout& r : rollouts) {
-    if (!r.failed) usable.push_back(&r);
-  }
-  stats.collect_seconds = std::chrono::duration<double>(Clock::now() - start).count();
-  if (usable.empty()) {
-    // Every server failed during this iteration: nothing to learn from; try again.
-    stats.iteration = iteration_;
-    stats.env_steps = env_steps_;
-    LogLine("iteration %d: every session failed while collecting; retrying", iteration_ + 1);
-    return stats;
-  }
+  return rollouts;
+}
 
-  // Rewards: task (imitation + energy, from the server) and AMP style, then GAE per session.
-  std::vector<torch::Tensor> all_obs, all_actions, all_log_prob, all_values, all_advantages, all_returns, policy_amp;
-  double task_sum = 0, amp_sum = 0, samples = 0;
-  torch::Tensor terms_sum = torch::zeros({terms}, torch::kFloat64);
-  {
-    torch::NoGradGuard no_grad;
-    for (SlotRollout* r : usable) {
-      const torch::Tensor amp_flat = r->amp_next.reshape({-1, M});
-      const torch::Tensor amp_reward =
-          AmpReward(discriminator_->forward(amp_norm_->Normalize(amp_flat))).reshape({T, r->n}) * (1 - r->dones);
-      const torch::Tensor last_values = critic_->forward(obs_norm_->Normalize(r->next_obs));
-      // Time-outs bootstrap from the value of the state they ended in (rl_games' trick: the
-      // row's next observation already belongs to the next episode).
-      const torch::Tensor rewards = config_.task_reward_weight * r->task_reward +
-                                    config_.amp_reward_weight * amp_reward +
-                                    config_.gamma * r->values * r->truncated;
-      torch::Tensor advantages, returns;
-      ComputeGae(rewards, r->values, r->dones, last_values, config_.gamma, config_.lambda, &advantages, &returns);
-      all_obs.push_back(r->obs.reshape({-1, O}));
-      all_actions.push_back(r->actions.reshape({-1, A}));
-      all_log_prob.push_back(r->log_prob.reshape({-1}));
-      all_values.push_back(r->values.reshape({-1}));
-      all_advantages.push_back(advantages.reshape({-1}));
-      all_returns.push_back(returns.reshape({-1}));
-      policy_amp.push_back(amp_flat.index({(r->dones.reshape({-1}) < 0.5)}));
-      task_sum += r->task_reward.sum().item<double>();
-      amp_sum += amp_reward.sum().item<double>();
-      samples += static_cast<double>(T) * r->n;
-      terms_sum += r->reward_terms_sum;
+// Observations are normalized with the statistics of the iteration's start and stored
+// normalized, so that PPO's ratios compare the same inputs; the statistics absorb the
+// iteration's observations after the update. (With sigma = exp(-2.9), drifting inputs alone
+// would move log-probabilities by tens of nats.)
+absl::Status Trainer::Act(SlotRollout& r, int t, const torch::Tensor& obs) {
+  torch::NoGradGuard no_grad;
+  const torch::Tensor normalized = obs_norm_->Normalize(obs);
+  r.raw_obs.push_back(obs);
+  const torch::Tensor mean = policy_->forward(normalized);
+  const torch::Tensor log_std = policy_->log_std();
+  const torch::Tensor action = mean + log_std.exp() * torch::randn(mean.sizes(), generator_);
+  r.obs[t].copy_(normalized);
+  r.actions[t].copy_(action);
+  r.log_prob[t].copy_(ModSkillPolicyImpl::LogProb(mean, log_std, action));
+  r.values[t].copy_(critic_->forward(normalized));
+  const torch::Tensor contiguous = action.contiguous();
+  return r.slot->stream->SendActions(contiguous.data_ptr<float>());
+}
+
+void Trainer::RecordStep(SlotRollout& r, int t) {
+  const v1::StepResult& result = r.slot->stream->result();
+  const torch::Tensor reward = ToTorch(result.reward(), {r.n});
+  const torch::Tensor done = ToTorch(result.done(), {r.n});
+  const torch::Tensor truncated = ToTorch(result.truncated(), {r.n});
+  r.task_reward[t].copy_(reward);
+  r.dones[t].copy_(done);
+  r.truncated[t].copy_(truncated);
+  r.amp_next[t].copy_(ToTorch(result.amp_obs(), {r.n, layout_.amp_obs_size}));
+  r.reward_terms_sum += ToTorch(result.reward_terms(), {r.n, spec_.reward_terms_size()}).to(torch::kFloat64).sum(0);
+  auto& returns = episode_return_[slot_index_[r.slot]];
+  auto& lengths = episode_length_[slot_index_[r.slot]];
+  const float* reward_data = reward.data_ptr<float>();
+  const float* done_data = done.data_ptr<float>();
+  const float* truncated_data = truncated.data_ptr<float>();
+  for (int i = 0; i < r.n; ++i) {
+    returns[i] += reward_data[i];
+    ++lengths[i];
+    if (done_data[i] > 0.5f) {
+      recent_returns_.push_back(returns[i]);
+      recent_lengths_.push_back(lengths[i]);
+      recent_tracked_.push_back(truncated_data[i] > 0.5f ? 1.0 : 0.0);
+      returns[i] = 0;
+      lengths[i] = 0;
     }
   }
-  const torch::Tensor obs = torch::cat(all_obs), actions = torch::cat(all_actions);
-  const torch::Tensor old_log_prob = torch::cat(all_log_prob), old_values = torch::cat(all_values);
-  const torch::Tensor advantages = NormalizeAdvantages(torch::cat(all_advantages)), returns = torch::cat(all_returns);
-  const torch::Tensor& normalized_obs = obs;  // stored normalized
-  const int64_t batch = obs.size(0);
-  const auto update_start = Clock::now();
+  RecordEpisodeEnds(r.slot, result);
+}
 
-  // PPO (Schulman et al. 2017). A non-finite loss skips its minibatch; non-finite weights after
-  // the update roll back to the weights it started from.
+Trainer::TrainingBatch Trainer::ComputeReturns(const std::vector<SlotRollout*>& usable) {
+  torch::NoGradGuard no_grad;
+  const int T = config_.horizon;
+  const int64_t O = layout_.obs_size, A = layout_.action_size, M = layout_.amp_obs_size;
+  TrainingBatch batch;
+  batch.terms_sum = torch::zeros({spec_.reward_terms_size()}, torch::kFloat64);
+  std::vector<torch::Tensor> obs, actions, log_prob, values, advantages, returns, policy_amp, raw_obs;
+  for (SlotRollout* r : usable) {
+    // Reward: the server's task reward (imitation + energy) and the AMP style reward.
+    const torch::Tensor amp_flat = r->amp_next.reshape({-1, M});
+    const torch::Tensor amp_reward =
+        AmpReward(discriminator_->forward(amp_norm_->Normalize(amp_flat))).reshape({T, r->n}) * (1 - r->dones);
+    const torch::Tensor last_values = critic_->forward(obs_norm_->Normalize(r->next_obs));
+    // Time-outs bootstrap from the value of the state they ended in (rl_games' trick: the
+    // row's next observation already belongs to the next episode).
+    const torch::Tensor rewards = config_.task_reward_weight * r->task_reward +
+                                  config_.amp_reward_weight * amp_reward + config_.gamma * r->values * r->truncated;
+    torch::Tensor slot_advantages, slot_returns;
+    ComputeGae(rewards, r->values, r->dones, last_values, config_.gamma, config_.lambda, &slot_advantages,
+               &slot_returns);
+    obs.push_back(r->obs.reshape({-1, O}));
+    actions.push_back(r->actions.reshape({-1, A}));
+    log_prob.push_back(r->log_prob.reshape({-1}));
+    values.push_back(r->values.reshape({-1}));
+    advantages.push_back(slot_advantages.reshape({-1}));
+    returns.push_back(slot_returns.reshape({-1}));
+    policy_amp.push_back(amp_flat.index({(r->dones.reshape({-1}) < 0.5)}));
+    raw_obs.insert(raw_obs.end(), r->raw_obs.begin(), r->raw_obs.end());
+    batch.task_sum += r->task_reward.sum().item<double>();
+    batch.amp_sum += amp_reward.sum().item<double>();
+    batch.samples += static_cast<double>(T) * r->n;
+    batch.terms_sum += r->reward_terms_sum;
+  }
+  batch.obs = torch::cat(obs);
+  batch.actions = torch::cat(actions);
+  batch.old_log_prob = torch::cat(log_prob);
+  batch.old_values = torch::cat(values);
+  batch.advantages = NormalizeAdvantages(torch::cat(advantages));
+  batch.returns = torch::cat(returns);
+  batch.policy_amp = torch::cat(policy_amp);
+  batch.raw_obs = torch::cat(raw_obs);
+  batch.live_sessions = static_cast<int>(usable.size());
+  return batch;
+}
+
+// PPO (Schulman et al. 2017). A non-finite loss skips its minibatch; non-finite weights after the
+// update roll back to the weights it started from. The servers wait meanwhile, so the update may
+// use more threads than collection (config.update_threads).
+void Trainer::UpdatePolicy(const TrainingBatch& batch, IterationStats* stats) {
+  const ScopedTorchThreads threads(config_.update_threads);
   std::vector<torch::Tensor> snapshot;
   for (const torch::Tensor& p : optimizer_->param_groups()[0].params()) snapshot.push_back(p.detach().clone());
+  const torch::Tensor log_std = policy_->log_std();
   double policy_loss = 0, value_loss = 0, approx_kl = 0, clip_fraction = 0;
   int updates = 0;
-  const int64_t minibatch = std::min<int64_t>(config_.minibatch_size, batch);
+  const int64_t size = batch.obs.size(0);
+  const int64_t minibatch = std::min<int64_t>(config_.minibatch_size, size);
   for (int epoch = 0; epoch < config_.epochs; ++epoch) {
-    const torch::Tensor order = torch::randperm(batch, generator_);
-    for (int64_t begin = 0; begin + minibatch <= batch; begin += minibatch) {
+    const torch::Tensor order = torch::randperm(size, generator_);
+    for (int64_t begin = 0; begin + minibatch <= size; begin += minibatch) {
       const torch::Tensor index = order.slice(0, begin, begin + minibatch);
-      const torch::Tensor mb_obs = normalized_obs.index_select(0, index);
-      const torch::Tensor mean = policy_->forward(mb_obs);
-      const torch::Tensor new_log_prob = ModSkillPolicyImpl::LogProb(mean, log_std, actions.index_select(0, index));
-      const torch::Tensor new_values = critic_->forward(mb_obs);
-      PpoLossTerms loss = ComputePpoLoss(new_log_prob, old_log_prob.index_select(0, index),
-                                         advantages.index_select(0, index), new_values,
-                                         old_values.index_select(0, index), returns.index_select(0, index),
+      const torch::Tensor obs = batch.obs.index_select(0, index);
+      const torch::Tensor new_log_prob =
+          ModSkillPolicyImpl::LogProb(policy_->forward(obs), log_std, batch.actions.index_select(0, index));
+      PpoLossTerms loss = ComputePpoLoss(new_log_prob, batch.old_log_prob.index_select(0, index),
+                                         batch.advantages.index_select(0, index), critic_->forward(obs),
+                                         batch.old_values.index_select(0, index), batch.returns.index_select(0, index),
                                          config_.clip_ratio, config_.value_clip, config_.value_coefficient);
       if (!std::isfinite(loss.total.item<double>())) {
-        ++stats.skipped_updates;
+        ++stats->skipped_updates;
         continue;
       }
       optimizer_->zero_grad();
@@ -377,89 +450,83 @@ absl::StatusOr<IterationStats> Trainer::Iterate() {
     auto& params = optimizer_->param_groups()[0].params();
     for (size_t i = 0; i < params.size(); ++i) params[i].copy_(snapshot[i]);
     LogLine("iteration %d: non-finite weights after the update; kept the last good ones", iteration_ + 1);
-    ++stats.skipped_updates;
+    ++stats->skipped_updates;
   }
-  if (stats.skipped_updates > 0) {
-    LogLine("iteration %d: skipped %d updates with a non-finite loss", iteration_ + 1, stats.skipped_updates);
+  if (stats->skipped_updates > 0) {
+    LogLine("iteration %d: skipped %d updates with a non-finite loss", iteration_ + 1, stats->skipped_updates);
   }
+  if (updates > 0) {
+    stats->policy_loss = policy_loss / updates;
+    stats->value_loss = value_loss / updates;
+    stats->approx_kl = approx_kl / updates;
+    stats->clip_fraction = clip_fraction / updates;
+  }
+  obs_norm_->Update(batch.raw_obs);
+}
 
-  {
-    std::vector<torch::Tensor> raw;
-    for (SlotRollout* r : usable) raw.insert(raw.end(), r->raw_obs.begin(), r->raw_obs.end());
-    obs_norm_->Update(torch::cat(raw));
+void Trainer::UpdateDiscriminator(const TrainingBatch& batch, SessionSlot* source, IterationStats* stats) {
+  if (!(config_.amp_reward_weight > 0) || batch.policy_amp.size(0) == 0) return;
+  const ScopedTorchThreads threads(config_.update_threads);
+  const int64_t M = layout_.amp_obs_size;
+  v1::SampleReferenceAmpRequest request;
+  request.set_session_id(source->stream->opened().session_id());
+  request.set_num_samples(config_.amp_samples);
+  request.set_seed(config_.seed * 1000003 + iteration_);
+  auto reference = source->client->SampleReferenceAmp(request);
+  if (!reference.ok()) {
+    LogLine("iteration %d: no reference AMP samples (%s); discriminator not updated", iteration_ + 1,
+            reference.status().message());
+    return;
   }
-
-  // AMP discriminator: reference histories from the server against the policy's own.
-  const torch::Tensor policy_samples = torch::cat(policy_amp);
-  if (config_.amp_reward_weight > 0 && policy_samples.size(0) > 0) {
-    v1::SampleReferenceAmpRequest request;
-    request.set_session_id(usable.front()->slot->stream->opened().session_id());
-    request.set_num_samples(config_.amp_samples);
-    request.set_seed(config_.seed * 1000003 + iteration_);
-    auto reference = usable.front()->slot->client->SampleReferenceAmp(request);
-    if (!reference.ok()) {
-      LogLine("iteration %d: no reference AMP samples (%s); discriminator not updated", iteration_ + 1,
-              reference.status().message());
-    } else {
-      const torch::Tensor expert = ToTorch(reference->amp_obs(), {config_.amp_samples, M});
-      amp_norm_->Update(torch::cat({expert, policy_samples}));
-      double loss_sum = 0, expert_logit = 0, policy_logit = 0, penalty = 0;
-      for (int epoch = 0; epoch < config_.discriminator_epochs; ++epoch) {
-        const torch::Tensor pick =
-            torch::randint(policy_samples.size(0), {config_.amp_samples}, generator_, torch::kLong);
-        const torch::Tensor expert_in = amp_norm_->Normalize(expert).detach().requires_grad_(true);
-        const torch::Tensor policy_in = amp_norm_->Normalize(policy_samples.index_select(0, pick));
-        const torch::Tensor gradient_penalty = discriminator_->GradientPenalty(expert_in);
-        AmpLossTerms loss = ComputeAmpLoss(discriminator_->forward(expert_in), discriminator_->forward(policy_in),
-                                           gradient_penalty, config_.gradient_penalty_weight);
-        if (!std::isfinite(loss.total.item<double>())) {
-          ++stats.skipped_updates;
-          continue;
-        }
-        discriminator_optimizer_->zero_grad();
-        loss.total.backward();
-        discriminator_optimizer_->step();
-        loss_sum += loss.total.item<double>();
-        expert_logit += loss.expert_logit_mean.item<double>();
-        policy_logit += loss.policy_logit_mean.item<double>();
-        penalty += loss.gradient_penalty.item<double>();
-      }
-      const double epochs = config_.discriminator_epochs;
-      stats.discriminator_loss = loss_sum / epochs;
-      stats.expert_logit = expert_logit / epochs;
-      stats.policy_logit = policy_logit / epochs;
-      stats.gradient_penalty = penalty / epochs;
+  const torch::Tensor expert = ToTorch(reference->amp_obs(), {config_.amp_samples, M});
+  amp_norm_->Update(torch::cat({expert, batch.policy_amp}));
+  double loss_sum = 0, expert_logit = 0, policy_logit = 0, penalty = 0;
+  for (int epoch = 0; epoch < config_.discriminator_epochs; ++epoch) {
+    const torch::Tensor pick = torch::randint(batch.policy_amp.size(0), {config_.amp_samples}, generator_, torch::kLong);
+    const torch::Tensor expert_in = amp_norm_->Normalize(expert).detach().requires_grad_(true);
+    const torch::Tensor policy_in = amp_norm_->Normalize(batch.policy_amp.index_select(0, pick));
+    const torch::Tensor gradient_penalty = discriminator_->GradientPenalty(expert_in);
+    AmpLossTerms loss = ComputeAmpLoss(discriminator_->forward(expert_in), discriminator_->forward(policy_in),
+                                       gradient_penalty, config_.gradient_penalty_weight);
+    if (!std::isfinite(loss.total.item<double>())) {
+      ++stats->skipped_updates;
+      continue;
     }
+    discriminator_optimizer_->zero_grad();
+    loss.total.backward();
+    discriminator_optimizer_->step();
+    loss_sum += loss.total.item<double>();
+    expert_logit += loss.expert_logit_mean.item<double>();
+    policy_logit += loss.policy_logit_mean.item<double>();
+    penalty += loss.gradient_penalty.item<double>();
   }
+  const double epochs = config_.discriminator_epochs;
+  stats->discriminator_loss = loss_sum / epochs;
+  stats->expert_logit = expert_logit / epochs;
+  stats->policy_logit = policy_logit / epochs;
+  stats->gradient_penalty = penalty / epochs;
+}
 
-  ++iteration_;
-  env_steps_ += static_cast<int64_t>(samples);
-  if (config_.report_every > 0 && iteration_ % config_.report_every == 0) ReportFailures();
-  stats.iteration = iteration_;
-  stats.env_steps = env_steps_;
-  stats.update_seconds = std::chrono::duration<double>(Clock::now() - update_start).count();
-  const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
-  stats.env_steps_per_second = samples / seconds;
-  stats.mean_task_reward = task_sum / samples;
-  stats.mean_amp_reward = amp_sum / samples;
-  for (int64_t k = 0; k < std::min<int64_t>(terms, 8); ++k) stats.reward_terms[k] = terms_sum[k].item<double>() / samples;
+void Trainer::Summarize(const TrainingBatch& batch, IterationStats* stats) {
+  stats->iteration = iteration_;
+  stats->env_steps = env_steps_;
+  stats->mean_task_reward = batch.task_sum / batch.samples;
+  stats->mean_amp_reward = batch.amp_sum / batch.samples;
+  const int64_t terms = std::min<int64_t>(batch.terms_sum.size(0), 8);
+  for (int64_t k = 0; k < terms; ++k) stats->reward_terms[k] = batch.terms_sum[k].item<double>() / batch.samples;
   if (!recent_returns_.empty()) {
-    double r = 0, l = 0;
+    double r = 0, l = 0, tracked = 0;
     for (size_t i = 0; i < recent_returns_.size(); ++i) {
       r += recent_returns_[i];
       l += recent_lengths_[i];
+      tracked += recent_tracked_[i];
     }
-    stats.mean_episode_return = r / recent_returns_.size();
-    stats.mean_episode_length = l / recent_lengths_.size();
+    stats->mean_episode_return = r / recent_returns_.size();
+    stats->mean_episode_length = l / recent_lengths_.size();
+    stats->tracked_share = tracked / recent_tracked_.size();
+    curriculum_.Update(stats->tracked_share);
   }
-  if (updates > 0) {
-    stats.policy_loss = policy_loss / updates;
-    stats.value_loss = value_loss / updates;
-    stats.approx_kl = approx_kl / updates;
-    stats.clip_fraction = clip_fraction / updates;
-  }
-  stats.live_sessions = static_cast<int>(usable.size());
-  return stats;
+  stats->live_sessions = batch.live_sessions;
 }
 
 void Trainer::RecordEpisodeEnds(SessionSlot* slot, const v1::StepResult& result) {
@@ -553,6 +620,9 @@ absl::Status Trainer::SaveCheckpoint(const std::string& path) {
     archive.write("obs_size", torch::tensor(layout_.obs_size));
     archive.write("action_size", torch::tensor(layout_.action_size));
     archive.write("amp_obs_size", torch::tensor(layout_.amp_obs_size));
+    archive.write("action_mode", torch::tensor(static_cast<int64_t>(ActionModeOf(config_))));
+    archive.write("residual_scale", torch::tensor(config_.residual_scale, torch::kFloat64));
+    archive.write("termination_distance", torch::tensor(curriculum_.distance(), torch::kFloat64));
     std::ostringstream out(std::ios::binary);
     archive.save_to(out);
     return WriteFileAtomically(path, out.str());
@@ -585,6 +655,19 @@ absl::Status Trainer::LoadCheckpoint(const std::string& path) {
       archive.read(key, sub);
       module.load(sub);
     };
+    // Checkpoints from before action modes were trained in absolute mode.
+    torch::Tensor action_mode = torch::tensor(static_cast<int64_t>(ActionMode::kAbsolute));
+    torch::Tensor residual_scale = torch::tensor(config_.residual_scale, torch::kFloat64);
+    archive.try_read("action_mode", action_mode);
+    archive.try_read("residual_scale", residual_scale);
+    const auto trained_mode = static_cast<ActionMode>(action_mode.item<int64_t>());
+    if (trained_mode != ActionModeOf(config_) ||
+        (trained_mode == ActionMode::kResidual && residual_scale.item<double>() != config_.residual_scale)) {
+      return absl::FailedPreconditionError(absl::StrCat(
+          path, ": trained with --action_mode ", ActionModeName(trained_mode),
+          trained_mode == ActionMode::kResidual ? absl::StrCat(" --residual_scale ", residual_scale.item<double>()) : "",
+          "; resume with the same flags"));
+    }
     load_module("policy", *policy_);
     load_module("critic", *critic_);
     load_module("discriminator", *discriminator_);
@@ -597,6 +680,10 @@ absl::Status Trainer::LoadCheckpoint(const std::string& path) {
     discriminator_optimizer_->load(discriminator_optimizer);
     archive.read("iteration", iteration);
     archive.read("env_steps", env_steps);
+    torch::Tensor termination_distance;
+    if (archive.try_read("termination_distance", termination_distance)) {
+      curriculum_.set_distance(termination_distance.item<double>());
+    }
     iteration_ = static_cast<int>(iteration.item<int64_t>());
     env_steps_ = env_steps.item<int64_t>();
   } catch (const std::exception& e) {
@@ -615,6 +702,7 @@ absl::Status Trainer::ExportPolicy(const std::string& path) {
   spec.action_size = static_cast<int>(layout_.action_size);
   spec.joint_names.assign(spec_.joint_names().begin(), spec_.joint_names().end());
   spec.control_dt = spec_.control_dt();
+  spec.action = ActionMapping{ActionModeOf(config_), config_.residual_scale};
   return learner::ExportPolicy(policy_, obs_norm_, spec, path);
 }
 

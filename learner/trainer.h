@@ -9,6 +9,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include <torch/torch.h>
@@ -19,6 +20,7 @@
 #include "learner/modskill_policy.h"
 #include "learner/running_mean_std.h"
 #include "learner/server_pool.h"
+#include "learner/termination_curriculum.h"
 #include "learner/trainer_config.h"
 
 namespace modskill::learner {
@@ -39,6 +41,8 @@ struct IterationStats {
   double discriminator_loss = 0, expert_logit = 0, policy_logit = 0, gradient_penalty = 0;
   int live_sessions = 0;
   int skipped_updates = 0;  // minibatches skipped for a non-finite loss
+  double termination_distance = 0;  // m, the distance this iteration's episodes ran under
+  double tracked_share = 0;         // recently ended episodes that reached their clip's end
 };
 
 class Trainer {
@@ -52,6 +56,8 @@ class Trainer {
 
   int iteration() const { return iteration_; }
   int64_t env_steps() const { return env_steps_; }
+  // The training termination distance the next iteration runs under (m).
+  double termination_distance() const { return curriculum_.distance(); }
   const std::vector<IterationStats>& history() const { return history_; }
   ModSkillPolicy& policy() { return policy_; }
   RunningMeanStd& obs_norm() { return obs_norm_; }
@@ -67,7 +73,24 @@ class Trainer {
   explicit Trainer(const TrainerConfig& config);
   absl::Status WaitForServers();
   absl::Status BuildNetworks(const v1::EnvSpec& spec);
+  // One PPO iteration, in the phases of the algorithm box: collect, returns, policy update,
+  // discriminator update, summary.
   absl::StatusOr<IterationStats> Iterate();
+  struct SlotRollout;
+  struct TrainingBatch;
+  // Steps every live session `horizon` times with the current policy (round robin: while one
+  // session's server steps, the learner computes another's actions).
+  std::vector<SlotRollout> Collect();
+  // Samples actions for `obs` into step t of `r` and sends them.
+  absl::Status Act(SlotRollout& r, int t, const torch::Tensor& obs);
+  // Books one step result of `r` (rewards, dones, episode ends) at step t.
+  void RecordStep(SlotRollout& r, int t);
+  // AMP rewards, then GAE per session; concatenates the sessions' experience.
+  TrainingBatch ComputeReturns(const std::vector<SlotRollout*>& usable);
+  void UpdatePolicy(const TrainingBatch& batch, IterationStats* stats);
+  // Reference AMP samples from `source`'s server against the policy's own.
+  void UpdateDiscriminator(const TrainingBatch& batch, SessionSlot* source, IterationStats* stats);
+  void Summarize(const TrainingBatch& batch, IterationStats* stats);
   // Notes how the episodes that ended in `result` went, for the session's failure report.
   void RecordEpisodeEnds(SessionSlot* slot, const v1::StepResult& result);
   // Sends each live session its failure list and logs the hardest clips.
@@ -91,6 +114,9 @@ class Trainer {
   std::vector<std::vector<double>> episode_return_;
   std::vector<std::vector<int>> episode_length_;
   std::vector<double> recent_returns_, recent_lengths_;
+  std::vector<double> recent_tracked_;  // 1 where a recent episode reached its clip's end
+  TerminationCurriculum curriculum_{0.25, 0.25};
+  std::unordered_map<SessionSlot*, size_t> slot_index_;  // into episode_return_ / episode_length_
   torch::Generator generator_;
   // Failure lists not yet reported, per session (keyed by slot and its session generation).
   struct PendingReports {

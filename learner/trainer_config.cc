@@ -2,7 +2,10 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cmath>
+
 #include "absl/strings/str_cat.h"
+#include "server/core/action_mapping.h"
 
 namespace modskill::learner {
 
@@ -16,8 +19,12 @@ absl::StatusOr<TrainerConfig> TrainerConfig::ForPreset(const std::string& preset
     config.learning_rate = 2e-5;
     config.discriminator_learning_rate = 2e-5;
     config.epochs = 6;
+    config.discriminator_epochs = 2;
     config.minibatch_size = 16384;
     config.envs_per_server = 3072;
+    // The paper's mapping and termination: absolute PD targets, 0.25 m on every body.
+    config.action_mode = "absolute";
+    config.termination_bodies = "all";
   }
   return config;
 }
@@ -43,8 +50,35 @@ absl::Status TrainerConfig::Validate() const {
   if (run_dir.empty()) return absl::InvalidArgumentError("--run_dir: required");
   if (report_every < 0) return bad("report_every", report_every, "must be >= 0");
   if (checkpoint_every < 1) return bad("checkpoint_every", checkpoint_every, "must be >= 1");
+  if (update_threads < 0 || update_threads > 256) return bad("update_threads", update_threads, "must be in [0, 256]");
   if (!(server_timeout_s > 0)) return bad("server_timeout_s", server_timeout_s, "must be > 0");
+  auto mode = ParseActionMode(action_mode);
+  if (!mode.ok()) return absl::InvalidArgumentError(absl::StrCat("--action_mode: ", mode.status().message()));
+  if (absl::Status status = ActionMapping{*mode, residual_scale}.Validate("--residual_scale"); !status.ok()) {
+    return status;
+  }
+  if (!(std::isfinite(termination_distance) && termination_distance > 0 && termination_distance <= 100)) {
+    return bad("termination_distance", termination_distance, "m must be in (0, 100]");
+  }
+  if (termination_bodies != "all" && termination_bodies != "no_feet") {
+    return bad("termination_bodies", termination_bodies.substr(0, 64), "is not all or no_feet");
+  }
+  if (curriculum_start != 0 || curriculum_end != 0) {
+    auto in_range = [](double d) { return std::isfinite(d) && d > 0 && d <= 100; };
+    if (!in_range(curriculum_start) || !in_range(curriculum_end)) {
+      return absl::InvalidArgumentError(absl::StrCat("--termination_curriculum: ", curriculum_start, ":",
+                                                     curriculum_end, " distances must be in (0, 100] m"));
+    }
+    if (curriculum_start < curriculum_end) {
+      return absl::InvalidArgumentError(absl::StrCat("--termination_curriculum: start ", curriculum_start,
+                                                     " is below end ", curriculum_end, " (it starts loose and tightens)"));
+    }
+  }
   return absl::OkStatus();
+}
+
+ActionMode ActionModeOf(const TrainerConfig& config) {
+  return config.action_mode == "residual" ? ActionMode::kResidual : ActionMode::kAbsolute;
 }
 
 std::string TrainerConfig::ToJson() const {
@@ -72,6 +106,12 @@ std::string TrainerConfig::ToJson() const {
   json["gradient_penalty_weight"] = gradient_penalty_weight;
   json["seed"] = seed;
   json["report_every"] = report_every;
+  json["action_mode"] = action_mode;
+  json["residual_scale"] = residual_scale;
+  json["termination_distance"] = termination_distance;
+  json["termination_bodies"] = termination_bodies;
+  json["update_threads"] = update_threads;
+  json["termination_curriculum"] = {curriculum_start, curriculum_end};
   return json.dump(1);
 }
 

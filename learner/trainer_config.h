@@ -7,6 +7,7 @@
 
 #include "absl/status/statusor.h"
 #include "learner/model_config.h"
+#include "server/core/action_mapping.h"
 
 namespace modskill::learner {
 
@@ -21,11 +22,30 @@ struct TrainerConfig {
   std::vector<std::string> motions;  // clip names; empty: the server's whole library
   double server_timeout_s = 120;     // exit when no server answers for this long
 
+  // How actions drive the PD targets and when training episodes fail (see ../server/core/
+  // action_mapping.h and tracking_env.h).
+  std::string action_mode = "residual";  // absolute | residual
+  double residual_scale = 0.5;
+  double termination_distance = 0.25;      // m, any watched body farther than this fails
+  // Small preset: PHC's no_feet (bench/learning_bench.sh on deepmimic_walk, 0.49 M steps:
+  // eval Succ 100 % and E_mpjpe 64 mm against 0 % and 95 mm watching every body).
+  std::string termination_bodies = "no_feet";  // all | no_feet
+  // A termination curriculum (both > 0): the distance starts at curriculum_start and moves
+  // toward curriculum_end as more episodes track their clip to the end (see
+  // termination_curriculum.h); termination_distance is then unused.
+  double curriculum_start = 0, curriculum_end = 0;
+  // Torch threads for the PPO and discriminator updates, while the servers wait (0: keep the
+  // collection's).
+  int update_threads = 2;
+
   // What to learn with.
   ModelConfig model;
   int iterations = 100;
   int horizon = 32;             // steps per env per iteration (PHC)
-  int epochs = 5;
+  // Small preset: 2 epochs and 1 discriminator epoch. The update runs on the cores the servers
+  // step on, so its cost per sample bounds end-to-end throughput (bench/learner_throughput_bench:
+  // 5 + 2 epochs gave 0.24 x the server alone, 2 + 1 gave 0.52 x).
+  int epochs = 2;
   int minibatch_size = 2048;
   // Small preset. With sigma = exp(-2.9) PPO's ratios are steep: at 1e-4 about 80 % of the
   // samples clip, 3e-4 diverges (KL ~ 30); the paper's 2e-5 suits its 3072-env GPU batches.
@@ -40,7 +60,7 @@ struct TrainerConfig {
   double amp_reward_weight = 0.5;
   double discriminator_learning_rate = 1e-4;
   double gradient_penalty_weight = 5.0;
-  int discriminator_epochs = 2;
+  int discriminator_epochs = 1;
   int amp_samples = 2048;  // expert and policy samples per discriminator epoch
   uint64_t seed = 1;
   int report_every = 5;  // iterations between failure reports to the servers' samplers; 0: never
@@ -54,6 +74,9 @@ struct TrainerConfig {
   absl::Status Validate() const;
   std::string ToJson() const;
 };
+
+// The action mode of a validated config.
+ActionMode ActionModeOf(const TrainerConfig& config);
 
 }  // namespace modskill::learner
 

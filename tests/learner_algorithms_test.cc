@@ -21,6 +21,7 @@
 #include "learner/gae.h"
 #include "learner/ppo_loss.h"
 #include "learner/tensorboard_writer.h"
+#include "learner/termination_curriculum.h"
 
 namespace modskill::learner {
 namespace {
@@ -232,6 +233,28 @@ TEST(AmpLossTest, Reward) {
 
 // ------------------------------------------------------------------------------------------
 // CRC32C
+
+TEST(TerminationCurriculumTest, TightensWhileEpisodesReachTheEndAndLoosensWhenTheyDoNot) {
+  TerminationCurriculum curriculum(1.0, 0.2);
+  EXPECT_DOUBLE_EQ(curriculum.distance(), 1.0);
+  const double step = TerminationCurriculum::kStepShare * 0.8;
+  curriculum.Update(0.9);
+  EXPECT_NEAR(curriculum.distance(), 1.0 - step, 1e-12);
+  curriculum.Update(0.3);  // between the thresholds: stays
+  EXPECT_NEAR(curriculum.distance(), 1.0 - step, 1e-12);
+  curriculum.Update(0.1);
+  EXPECT_NEAR(curriculum.distance(), 1.0, 1e-12);
+  curriculum.Update(0.0);  // never looser than start
+  EXPECT_DOUBLE_EQ(curriculum.distance(), 1.0);
+  for (int i = 0; i < 100; ++i) curriculum.Update(1.0);  // never tighter than end
+  EXPECT_DOUBLE_EQ(curriculum.distance(), 0.2);
+  curriculum.set_distance(5.0);
+  EXPECT_DOUBLE_EQ(curriculum.distance(), 1.0);
+  TerminationCurriculum fixed(0.25, 0.25);
+  fixed.Update(1.0);
+  fixed.Update(0.0);
+  EXPECT_DOUBLE_EQ(fixed.distance(), 0.25);
+}
 
 TEST(Crc32cTest, KnownVectors) {
   EXPECT_EQ(Crc32c(""), 0x00000000u);

@@ -2,6 +2,8 @@
 // the exported policy runs in the server, a dead server does not stop training, and a run
 // with no server fails with a clear message.
 #include <cstdio>
+#include <functional>
+#include <limits>
 #include <filesystem>
 #include <fstream>
 
@@ -11,6 +13,7 @@
 #include "learner/evaluation.h"
 #include "learner/trainer.h"
 #include "server/core/atomic_file.h"
+#include "server/service/policy_checkpoint.h"
 #include "tests/server_fixture.h"
 
 namespace modskill::learner {
@@ -59,6 +62,11 @@ TEST(LearnerTrainingTest, TrainsCheckpointsAndExportsAPolicyTheServerRuns) {
   EXPECT_TRUE(std::filesystem::exists(dir + "/checkpoint.pt"));
   EXPECT_TRUE(std::filesystem::exists(dir + "/policy.pt"));
   EXPECT_TRUE(std::filesystem::exists(dir + "/config.json"));
+  // policy.pt records the action mode it was trained in (the small preset's: residual).
+  auto exported = PolicyCheckpoint::LoadFile(dir + "/policy.pt");
+  ASSERT_TRUE(exported.ok()) << exported.status();
+  EXPECT_EQ((*exported)->spec().action.mode, ActionMode::kResidual);
+  EXPECT_DOUBLE_EQ((*exported)->spec().action.residual_scale, config.residual_scale);
 
   // Every episode that ended was reported to the session's sampler, failures and successes.
   auto client = ConnectTo(*server);
@@ -86,6 +94,9 @@ TEST(LearnerTrainingTest, CheckpointRoundTripAndResume) {
   auto server = StartTestServer();
   const std::string dir = RunDir("resume");
   TrainerConfig config = SmallConfig({server->port()}, dir);
+  // A curriculum that starts at 2 m and moves every iteration (episodes reach the clip end or not).
+  config.curriculum_start = 2.0;
+  config.curriculum_end = 0.25;
   auto first = Trainer::Create(config);
   ASSERT_TRUE(first.ok());
   ASSERT_TRUE((*first)->Run().ok());
@@ -98,10 +109,21 @@ TEST(LearnerTrainingTest, CheckpointRoundTripAndResume) {
   ASSERT_TRUE(resumed.ok()) << resumed.status();
   EXPECT_EQ((*resumed)->iteration(), 2);
   EXPECT_EQ((*resumed)->env_steps(), (*first)->env_steps());
+  // The curriculum continues where it stopped.
+  EXPECT_NE((*first)->termination_distance(), 2.0);
+  EXPECT_DOUBLE_EQ((*resumed)->termination_distance(), (*first)->termination_distance());
   const torch::Tensor after = (*resumed)->policy()->forward((*resumed)->obs_norm()->Normalize(probe)).detach();
   EXPECT_TRUE(torch::equal(before, after));
   ASSERT_TRUE((*resumed)->Run().ok());
   EXPECT_EQ((*resumed)->iteration(), 3);
+
+  // A run resumes in the action mode it was trained in; another is refused, naming the flag.
+  TrainerConfig absolute = config;
+  absolute.action_mode = "absolute";
+  auto switched = Trainer::Create(absolute);
+  ASSERT_FALSE(switched.ok());
+  EXPECT_EQ(switched.status().code(), absl::StatusCode::kFailedPrecondition);
+  EXPECT_THAT(std::string(switched.status().message()), HasSubstr("--action_mode residual"));
 
   // A damaged checkpoint is an error, not a crash; the good one is untouched.
   const std::string damaged = dir + "/damaged.pt";
@@ -181,6 +203,31 @@ TEST(LearnerTrainingTest, BadConfigurationsAreClearErrors) {
   config = SmallConfig({}, RunDir("x"));
   EXPECT_THAT(std::string(Trainer::Create(config).status().message()), HasSubstr("servers"));
   EXPECT_FALSE(TrainerConfig::ForPreset("huge").ok());
+  // Action modes and termination: each bad value names its flag before any server is contacted.
+  struct Bad {
+    std::function<void(TrainerConfig*)> mutate;
+    std::string flag;
+  };
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const std::vector<Bad> bad = {
+      {[](TrainerConfig* c) { c->action_mode = "sideways"; }, "--action_mode"},
+      {[&](TrainerConfig* c) { c->residual_scale = nan; }, "--residual_scale"},
+      {[](TrainerConfig* c) { c->residual_scale = 0; }, "--residual_scale"},
+      {[](TrainerConfig* c) { c->residual_scale = -1; }, "--residual_scale"},
+      {[](TrainerConfig* c) { c->termination_distance = 0; }, "--termination_distance"},
+      {[](TrainerConfig* c) { c->termination_distance = 150; }, "--termination_distance"},
+      {[](TrainerConfig* c) { c->termination_bodies = "toes"; }, "--termination_bodies"},
+      {[](TrainerConfig* c) { c->curriculum_start = 0.25, c->curriculum_end = 1.0; }, "--termination_curriculum"},
+      {[&](TrainerConfig* c) { c->curriculum_start = nan, c->curriculum_end = 0.25; }, "--termination_curriculum"},
+  };
+  for (const Bad& b : bad) {
+    TrainerConfig broken = SmallConfig({1}, RunDir("bad"));
+    b.mutate(&broken);
+    const absl::Status status = broken.Validate();
+    EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument) << b.flag;
+    EXPECT_THAT(std::string(status.message()), HasSubstr(b.flag));
+    EXPECT_FALSE(Trainer::Create(broken).ok()) << b.flag;
+  }
 }
 
 // A few iterations on one clip: the mean episode return rises (measured with this seed:

@@ -103,6 +103,10 @@ TEST_F(SimulationServerTest, DescribeShipsTheLayout) {
   EXPECT_EQ(spec->num_motions(), DefaultMotions()->size());
   EXPECT_EQ(spec->reward_terms_size(), kNumRewardTerms);
   EXPECT_EQ(spec->part_layouts_size(), 4);
+  EXPECT_THAT(std::vector<std::string>(spec->action_modes().begin(), spec->action_modes().end()),
+              ::testing::ElementsAre("absolute", "residual"));
+  EXPECT_THAT(std::vector<std::string>(spec->termination_bodies().begin(), spec->termination_bodies().end()),
+              ::testing::ElementsAre("all", "no_feet"));
   auto three = client_->Describe("3part");
   ASSERT_TRUE(three.ok());
   EXPECT_EQ(three->parts_size(), 3);
@@ -184,12 +188,65 @@ TEST_F(SimulationServerTest, BadSessionConfigsAreRejected) {
   config = Config(2);
   config.set_termination(static_cast<v1::TerminationMode>(17));
   cases.push_back({config, absl::StatusCode::kInvalidArgument, "termination"});
+  config = Config(2);
+  config.set_action_mode(static_cast<v1::ActionMode>(9));
+  cases.push_back({config, absl::StatusCode::kInvalidArgument, "action_mode"});
+  for (float scale : {-0.5f, std::nanf(""), std::numeric_limits<float>::infinity(), 11.f}) {
+    config = Config(2);
+    config.set_action_mode(v1::RESIDUAL);
+    config.set_residual_scale(scale);
+    cases.push_back({config, absl::StatusCode::kInvalidArgument, "residual_scale"});
+  }
+  config = Config(2);
+  config.set_residual_scale(0.3f);  // absolute mode has no residual scale
+  cases.push_back({config, absl::StatusCode::kInvalidArgument, "residual_scale"});
+  config = Config(2);
+  config.set_termination_bodies(static_cast<v1::TerminationBodies>(5));
+  cases.push_back({config, absl::StatusCode::kInvalidArgument, "termination_bodies"});
   for (const Case& c : cases) {
     auto stream = client_->OpenSession(c.config);
     ASSERT_FALSE(stream.ok()) << c.message;
     EXPECT_EQ(stream.status().code(), c.code) << stream.status();
     EXPECT_THAT(std::string(stream.status().message()), HasSubstr(c.message));
   }
+}
+
+// A curriculum moves the termination distance between steps; bad values end only that session.
+TEST_F(SimulationServerTest, TerminationDistanceChangesMidStream) {
+  v1::SessionConfig config = Config(4, 7);
+  config.add_motions("cmu_02_01");
+  auto stream = client_->OpenSession(config);
+  ASSERT_TRUE(stream.ok()) << stream.status();
+  std::vector<float> zeros(4 * 69, 0.f);  // absolute zeros: every character falls
+  auto terminations = [&](int steps) {  // episodes ended by the distance, not the clip's end
+    int ended = 0;
+    for (int s = 0; s < steps; ++s) {
+      EXPECT_TRUE((*stream)->Step(zeros.data()).ok());
+      const std::string& done = (*stream)->result().done().data();
+      const std::string& truncated = (*stream)->result().truncated().data();
+      for (size_t i = 0; i < done.size(); ++i) ended += done[i] && !truncated[i];
+    }
+    return ended;
+  };
+  (*stream)->SetTerminationDistance(100);
+  EXPECT_EQ(terminations(10), 0);
+  (*stream)->SetTerminationDistance(0.001f);
+  EXPECT_GE(terminations(4), 4);
+  for (float bad : {-1.f, 100.5f, std::nanf("")}) {
+    v1::SimulateRequest first;
+    *first.mutable_config() = Config(2);
+    v1::SimulateRequest step;
+    v1::Tensor* t = step.mutable_actions();
+    t->add_shape(2);
+    t->add_shape(69);
+    t->set_dtype(v1::FLOAT32);
+    t->set_data(std::string(2 * 69 * 4, '\0'));
+    step.set_termination_distance(bad);
+    grpc::Status status = RawSimulate(*server_, {first, step});
+    EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << bad;
+    EXPECT_THAT(status.error_message(), HasSubstr("termination_distance"));
+  }
+  EXPECT_TRUE((*stream)->Step(zeros.data()).ok());
 }
 
 TEST_F(SimulationServerTest, FirstMessageMustBeTheConfig) {
@@ -718,6 +775,64 @@ TEST_F(SimulationServerTest, RolloutBadInputs) {
   request.set_checkpoint_path(ZeroPolicy());
   request.add_clips("not_a_clip");
   expect(request, absl::StatusCode::kNotFound, "clips[1]");
+  // A checkpoint runs in the action mode it was trained in; insisting on another is refused.
+  request.clear_clips();
+  request.add_clips("deepmimic_walk");
+  request.set_action_mode(v1::RESIDUAL);
+  expect(request, absl::StatusCode::kFailedPrecondition, "action_mode");
+  request.set_action_mode(static_cast<v1::ActionMode>(12));
+  expect(request, absl::StatusCode::kInvalidArgument, "action_mode");
+  request.set_action_mode(v1::ABSOLUTE);
+  EXPECT_TRUE(client_->Rollout(request).ok());
+}
+
+// The zero residual policy is open-loop reference tracking: it runs in residual mode (recorded in
+// the checkpoint) and tracks the pose far better than the zero absolute policy, which holds every
+// joint at its range midpoint.
+TEST_F(SimulationServerTest, RolloutRunsAPolicyInItsTrainedActionMode) {
+  auto catalog = PartLayoutCatalog::LoadDefault(DefaultSpec());
+  auto humanoid = HumanoidModel::Create(DefaultSpec(), PhysicsOptions());
+  PolicySpec residual = PolicySpec::FromEnvSpec(MakeEnvSpec(**humanoid, *catalog->Get("5part")));
+  residual.action = ActionMapping{ActionMode::kResidual, 0.5};
+  auto bytes = AffinePolicyBytes(residual, {}, {});
+  ASSERT_TRUE(bytes.ok()) << bytes.status();
+  v1::RolloutRequest request;
+  request.set_checkpoint_bytes(*bytes);
+  request.add_clips("deepmimic_walk");
+  auto open_loop = client_->Rollout(request);
+  ASSERT_TRUE(open_loop.ok()) << open_loop.status();
+  request.set_action_mode(v1::ABSOLUTE);
+  auto refused = client_->Rollout(request);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.status().code(), absl::StatusCode::kFailedPrecondition);
+  EXPECT_THAT(std::string(refused.status().message()), HasSubstr("residual"));
+  v1::RolloutRequest absolute;
+  absolute.set_checkpoint_path(ZeroPolicy());
+  absolute.add_clips("deepmimic_walk");
+  auto falls = client_->Rollout(absolute);
+  ASSERT_TRUE(falls.ok()) << falls.status();
+  // (Under evaluation termination the collapse takes a second either way; the pose error tells.)
+  EXPECT_LT((*open_loop)[0].mpjpe_mm(), 0.75 * (*falls)[0].mpjpe_mm());
+}
+
+// Checkpoints from before action modes carry no action_mode: they were trained in absolute mode.
+TEST(PolicySpecTest, OldSpecsLoadAsAbsoluteAndBadModesAreRefused) {
+  const std::string old_json =
+      R"({"part_layout": "5part", "obs_size": 934, "action_size": 69, "joint_names": [], "control_dt": 0.0333})";
+  auto old_spec = PolicySpec::FromJson(old_json);
+  ASSERT_TRUE(old_spec.ok()) << old_spec.status();
+  EXPECT_EQ(old_spec->action.mode, ActionMode::kAbsolute);
+  PolicySpec residual = *old_spec;
+  residual.action = ActionMapping{ActionMode::kResidual, 0.25};
+  auto round_trip = PolicySpec::FromJson(residual.ToJson());
+  ASSERT_TRUE(round_trip.ok());
+  EXPECT_EQ(round_trip->action.mode, ActionMode::kResidual);
+  EXPECT_DOUBLE_EQ(round_trip->action.residual_scale, 0.25);
+  std::string bad = residual.ToJson();
+  bad.replace(bad.find("residual\""), 9, "sideways\"");
+  auto refused = PolicySpec::FromJson(bad);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_THAT(std::string(refused.status().message()), HasSubstr("action_mode"));
 }
 
 TEST_F(SimulationServerTest, AddMotionsUploadsAndValidates) {

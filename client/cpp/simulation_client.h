@@ -39,6 +39,9 @@ class SimulationStream {
   absl::Status Step(const float* actions);
   // Split halves of Step, so a caller can work while the server steps.
   absl::Status SendActions(const float* actions);
+  // From the next SendActions on, asks the server for this termination distance (m); 0 keeps the
+  // session's own. A curriculum calls it between steps.
+  void SetTerminationDistance(float distance) { request_.set_termination_distance(distance); }
   absl::Status ReceiveResult();
   const v1::StepResult& result() const { return response_.step(); }
   // The name of a clip id of this session (StepResult.clip_id, ended_clip_id), following the

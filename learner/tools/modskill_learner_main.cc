@@ -5,6 +5,7 @@
 //   modskill-learner --eval --checkpoint DIR/policy.pt --servers host:port [--clips a,b] [--eval_out DIR]
 #include <signal.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
@@ -16,7 +17,9 @@
 #include "absl/flags/parse.h"
 #include "absl/flags/usage.h"
 #include "absl/strings/str_cat.h"
+#include "absl/strings/numbers.h"
 #include "absl/strings/str_format.h"
+#include "absl/strings/str_split.h"
 #include "absl/time/clock.h"
 #include "learner/evaluation.h"
 #include "learner/tensorboard_writer.h"
@@ -39,9 +42,19 @@ ABSL_FLAG(bool, no_attention, false, "ablation: no attention across parts");
 ABSL_FLAG(int, horizon, 32, "steps per env per iteration");
 ABSL_FLAG(int, epochs, 0, "PPO epochs per iteration (0: the preset's)");
 ABSL_FLAG(int, minibatch_size, 0, "PPO minibatch (0: the preset's)");
+ABSL_FLAG(int, discriminator_epochs, 0, "AMP discriminator epochs per iteration (0: the preset's)");
 ABSL_FLAG(double, learning_rate, 0, "Adam learning rate (0: the preset's)");
 ABSL_FLAG(double, log_std, 0, "fixed log standard deviation of the Gaussian policy (0: the preset's)");
 ABSL_FLAG(double, amp_reward_weight, 0.5, "weight of the AMP style reward (task: 1 - this)");
+ABSL_FLAG(std::string, action_mode, "", "absolute (PD target = offset + scale * a, the paper's) or residual "
+          "(the reference pose + residual_scale * scale * a); default: the preset's (small: residual, paper: absolute)");
+ABSL_FLAG(double, residual_scale, 0.5, "residual mode: share of each hinge's action scale an action of 1 moves");
+ABSL_FLAG(double, termination_distance, 0.25, "training: an episode fails when a watched body is farther (m)");
+ABSL_FLAG(std::string, termination_bodies, "",
+          "bodies training termination watches: all or no_feet (PHC); default: the preset's (small: no_feet, paper: all)");
+ABSL_FLAG(std::string, termination_curriculum, "",
+          "START:END (m): start loose and tighten toward END as episodes reach their clip's end");
+ABSL_FLAG(int, update_threads, 2, "torch threads for the updates, while the servers wait (0: as --threads)");
 ABSL_FLAG(uint64_t, seed, 1, "random seed");
 ABSL_FLAG(int, checkpoint_every, 10, "iterations between checkpoints");
 ABSL_FLAG(int, report_every, 5, "iterations between failure reports to the servers' samplers (0: never)");
@@ -54,6 +67,10 @@ ABSL_FLAG(bool, eval, false, "evaluate --checkpoint instead of training");
 ABSL_FLAG(std::string, checkpoint, "", "--eval: the exported TorchScript policy (run_dir/policy.pt)");
 ABSL_FLAG(std::vector<std::string>, clips, {}, "--eval: clips to evaluate (default: all)");
 ABSL_FLAG(std::string, eval_out, "", "--eval: directory for eval.json and eval.md (default: the checkpoint's)");
+ABSL_FLAG(bool, baseline, false,
+          "--eval: evaluate the open-loop reference (PD targets = the reference pose) instead of --checkpoint");
+ABSL_FLAG(std::vector<std::string>, milestones, {},
+          "env step counts (e.g. 1e6,5e6) at which the policy is also exported as policy_at_<N>M.pt");
 
 namespace modskill::learner {
 namespace {
@@ -68,33 +85,66 @@ int Fail(const std::string& message, int code = 1) {
 
 int RunEvaluation(const std::string& token) {
   const std::string checkpoint = absl::GetFlag(FLAGS_checkpoint);
-  if (checkpoint.empty()) return Fail("--eval needs --checkpoint (a run's policy.pt)", 2);
+  const bool baseline_only = absl::GetFlag(FLAGS_baseline);
+  if (checkpoint.empty() == !baseline_only) {
+    return Fail("--eval needs --checkpoint (a run's policy.pt) or --baseline, not both", 2);
+  }
   if (absl::GetFlag(FLAGS_servers).empty()) return Fail("--eval needs --servers", 2);
-  auto bytes = ReadFileToString(checkpoint, size_t{2} << 30);
-  if (!bytes.ok()) return Fail(absl::StrCat("--checkpoint: ", bytes.status().message()));
   ClientOptions options;
   options.server = absl::GetFlag(FLAGS_servers)[0];
   options.token = token;
   options.tls_ca_file = absl::GetFlag(FLAGS_tls_ca);
   auto client = SimulationClient::Connect(options);
   if (!client.ok()) return Fail(std::string(client.status().message()));
-  LogLine("evaluating %s on %s", checkpoint, options.server);
-  auto report = Evaluate(**client, checkpoint, *bytes, absl::GetFlag(FLAGS_clips));
-  if (!report.ok()) return Fail(std::string(report.status().message()));
-  const std::string markdown = report->ToMarkdown("ModSkill (modskill, " + absl::GetFlag(FLAGS_preset) + ")");
+  auto spec = (*client)->Describe();
+  if (!spec.ok()) return Fail(std::string(spec.status().message()));
+  auto reference_policy = OpenLoopReferencePolicy(*spec);
+  if (!reference_policy.ok()) return Fail(std::string(reference_policy.status().message()));
+  const std::vector<std::string> clips = absl::GetFlag(FLAGS_clips);
+  LogLine("evaluating the open-loop reference on %s", options.server);
+  auto baseline = Evaluate(**client, "open-loop reference", *reference_policy, clips);
+  if (!baseline.ok()) return Fail(std::string(baseline.status().message()));
+  std::string markdown, json;
+  if (baseline_only) {
+    markdown = baseline->ToMarkdown("open-loop reference (no learning)");
+    json = baseline->ToJson();
+  } else {
+    auto bytes = ReadFileToString(checkpoint, size_t{2} << 30);
+    if (!bytes.ok()) return Fail(absl::StrCat("--checkpoint: ", bytes.status().message()));
+    LogLine("evaluating %s on %s", checkpoint, options.server);
+    auto report = Evaluate(**client, checkpoint, *bytes, clips);
+    if (!report.ok()) return Fail(std::string(report.status().message()));
+    markdown = report->ToMarkdown("ModSkill (modskill, " + absl::GetFlag(FLAGS_preset) + ")") +
+               CompareWithBaseline(*report, *baseline);
+    json = report->ToJson();
+  }
   std::printf("%s", markdown.c_str());
   std::string out_dir = absl::GetFlag(FLAGS_eval_out);
   if (out_dir.empty()) out_dir = std::filesystem::path(checkpoint).parent_path().string();
   if (out_dir.empty()) out_dir = ".";
   std::error_code error;
   std::filesystem::create_directories(out_dir, error);
-  for (const auto& [name, text] : {std::pair<std::string, std::string>{"eval.json", report->ToJson()}, {"eval.md", markdown}}) {
+  for (const auto& [name, text] : {std::pair<std::string, std::string>{"eval.json", json}, {"eval.md", markdown}}) {
     if (absl::Status status = WriteFileAtomically(out_dir + "/" + name, text); !status.ok()) {
       return Fail(std::string(status.message()));
     }
   }
   LogLine("wrote %s/eval.json and %s/eval.md", out_dir, out_dir);
   return 0;
+}
+
+// --milestones: "1e6,5e6" -> sorted step counts.
+absl::StatusOr<std::vector<int64_t>> ParseMilestones(const std::vector<std::string>& values) {
+  std::vector<int64_t> steps;
+  for (const std::string& value : values) {
+    double count = 0;
+    if (!absl::SimpleAtod(value, &count) || !(count >= 1 && count < 1e15)) {
+      return absl::InvalidArgumentError(absl::StrCat("--milestones: '", value.substr(0, 32), "' is not a step count >= 1"));
+    }
+    steps.push_back(static_cast<int64_t>(count));
+  }
+  std::sort(steps.begin(), steps.end());
+  return steps;
 }
 
 int RunTraining(const std::string& token) {
@@ -113,6 +163,7 @@ int RunTraining(const std::string& token) {
   config->model.attention = !absl::GetFlag(FLAGS_no_attention);
   config->horizon = absl::GetFlag(FLAGS_horizon);
   if (absl::GetFlag(FLAGS_epochs) > 0) config->epochs = absl::GetFlag(FLAGS_epochs);
+  if (absl::GetFlag(FLAGS_discriminator_epochs) > 0) config->discriminator_epochs = absl::GetFlag(FLAGS_discriminator_epochs);
   if (absl::GetFlag(FLAGS_minibatch_size) > 0) config->minibatch_size = absl::GetFlag(FLAGS_minibatch_size);
   if (absl::GetFlag(FLAGS_learning_rate) > 0) config->learning_rate = absl::GetFlag(FLAGS_learning_rate);
   if (absl::GetFlag(FLAGS_log_std) != 0) config->model.log_std = absl::GetFlag(FLAGS_log_std);
@@ -120,6 +171,18 @@ int RunTraining(const std::string& token) {
   if (!(amp_weight >= 0 && amp_weight <= 1)) return Fail("--amp_reward_weight must be in [0, 1]", 2);
   config->amp_reward_weight = amp_weight;
   config->task_reward_weight = 1 - amp_weight;
+  if (!absl::GetFlag(FLAGS_action_mode).empty()) config->action_mode = absl::GetFlag(FLAGS_action_mode);
+  config->residual_scale = absl::GetFlag(FLAGS_residual_scale);
+  config->termination_distance = absl::GetFlag(FLAGS_termination_distance);
+  if (!absl::GetFlag(FLAGS_termination_bodies).empty()) config->termination_bodies = absl::GetFlag(FLAGS_termination_bodies);
+  if (const std::string curriculum = absl::GetFlag(FLAGS_termination_curriculum); !curriculum.empty()) {
+    const std::vector<std::string> ends = absl::StrSplit(curriculum, ':');
+    if (ends.size() != 2 || !absl::SimpleAtod(ends[0], &config->curriculum_start) ||
+        !absl::SimpleAtod(ends[1], &config->curriculum_end)) {
+      return Fail(absl::StrCat("--termination_curriculum: '", curriculum.substr(0, 64), "' is not START:END in m"), 2);
+    }
+  }
+  config->update_threads = absl::GetFlag(FLAGS_update_threads);
   config->seed = absl::GetFlag(FLAGS_seed);
   config->checkpoint_every = absl::GetFlag(FLAGS_checkpoint_every);
   config->report_every = absl::GetFlag(FLAGS_report_every);
@@ -127,6 +190,8 @@ int RunTraining(const std::string& token) {
   config->server_timeout_s = absl::GetFlag(FLAGS_server_timeout_s);
   if (absl::Status status = config->Validate(); !status.ok()) return Fail(std::string(status.message()), 2);
 
+  auto milestones = ParseMilestones(absl::GetFlag(FLAGS_milestones));
+  if (!milestones.ok()) return Fail(std::string(milestones.status().message()), 2);
   auto trainer = Trainer::Create(*config);
   if (!trainer.ok()) return Fail(std::string(trainer.status().message()));
   auto events = TensorBoardWriter::Open(config->run_dir);
@@ -135,17 +200,20 @@ int RunTraining(const std::string& token) {
       "iteration", "env_steps", "env_steps_per_second", "mean_task_reward", "mean_amp_reward", "episode_return",
       "episode_length", "reward_pos", "reward_rot", "reward_vel", "reward_ang_vel", "reward_energy", "policy_loss",
       "value_loss", "approx_kl", "clip_fraction", "discriminator_loss", "expert_logit", "policy_logit",
-      "gradient_penalty", "live_sessions", "wall_seconds"};
+      "gradient_penalty", "live_sessions", "wall_seconds", "termination_distance", "tracked_share",
+      "collect_seconds", "update_seconds"};
   auto csv = CsvLogger::Open(config->run_dir + "/progress.csv", columns);
   if (!csv.ok()) return Fail(std::string(csv.status().message()));
 
+  size_t next_milestone = 0;  // milestones a resumed run passed already are skipped
+  while (next_milestone < milestones->size() && (*milestones)[next_milestone] <= (*trainer)->env_steps()) ++next_milestone;
   const absl::Time start = absl::Now();
   const double budget_min = absl::GetFlag(FLAGS_time_budget_min);
   const int first = (*trainer)->iteration(), last = first + config->iterations;
-  LogLine("training %s preset on %d server(s), %d envs each, layout %s%s%s, run dir %s",
+  LogLine("training %s preset on %d server(s), %d envs each, layout %s%s%s, %s actions, run dir %s",
           config->model.preset, static_cast<int>(config->servers.size()), config->envs_per_server,
           config->part_layout, config->model.whole_body ? ", whole-body controller" : "",
-          config->model.attention ? "" : ", no attention", config->run_dir);
+          config->model.attention ? "" : ", no attention", config->action_mode, config->run_dir);
   absl::Status status = (*trainer)->Run(
       [&](const IterationStats& s) {
         const double elapsed = absl::ToDoubleSeconds(absl::Now() - start);
@@ -155,11 +223,13 @@ int RunTraining(const std::string& token) {
         std::printf(
             "it %4d/%d | %9lld steps %5.0f/s | reward %.3f amp %.3f | return %6.2f len %5.1f | "
             "pos %.3f rot %.3f vel %.3f ang %.3f energy %.3f | pi %+.4f v %.4f kl %.4f clip %.3f | "
-            "D %.3f (expert %+.2f policy %+.2f) | sessions %d | collect %.1fs update %.1fs | left %s\n",
+            "D %.3f (expert %+.2f policy %+.2f) | term %.2fm tracked %.2f | sessions %d | collect %.1fs update %.1fs | "
+            "left %s\n",
             s.iteration, last, static_cast<long long>(s.env_steps), s.env_steps_per_second, s.mean_task_reward,
             s.mean_amp_reward, s.mean_episode_return, s.mean_episode_length, s.reward_terms[0], s.reward_terms[1],
             s.reward_terms[2], s.reward_terms[3], s.reward_terms[4], s.policy_loss, s.value_loss, s.approx_kl,
-            s.clip_fraction, s.discriminator_loss, s.expert_logit, s.policy_logit, s.live_sessions, s.collect_seconds,
+            s.clip_fraction, s.discriminator_loss, s.expert_logit, s.policy_logit, s.termination_distance,
+            s.tracked_share, s.live_sessions, s.collect_seconds,
             s.update_seconds,
             absl::FormatDuration(absl::Seconds(std::round(left))).c_str());
         std::fflush(stdout);
@@ -167,11 +237,22 @@ int RunTraining(const std::string& token) {
             double(s.iteration), double(s.env_steps), s.env_steps_per_second, s.mean_task_reward, s.mean_amp_reward,
             s.mean_episode_return, s.mean_episode_length, s.reward_terms[0], s.reward_terms[1], s.reward_terms[2],
             s.reward_terms[3], s.reward_terms[4], s.policy_loss, s.value_loss, s.approx_kl, s.clip_fraction,
-            s.discriminator_loss, s.expert_logit, s.policy_logit, s.gradient_penalty, double(s.live_sessions), elapsed};
+            s.discriminator_loss, s.expert_logit, s.policy_logit, s.gradient_penalty, double(s.live_sessions), elapsed,
+            s.termination_distance, s.tracked_share, s.collect_seconds, s.update_seconds};
         for (size_t c = 2; c < columns.size(); ++c) (void)(*events)->AddScalar(columns[c], s.env_steps, row[c]);
         (void)(*events)->Flush();
         (void)(*csv)->Append(row);
         if (budget_min > 0 && elapsed >= budget_min * 60) g_stop = true;
+        // The first iteration at or past a milestone exports the policy it ends with.
+        for (; next_milestone < milestones->size() && s.env_steps >= (*milestones)[next_milestone]; ++next_milestone) {
+          const std::string path =
+              absl::StrFormat("%s/policy_at_%gM.pt", config->run_dir, (*milestones)[next_milestone] / 1e6);
+          if (absl::Status exported = (*trainer)->ExportPolicy(path); !exported.ok()) {
+            LogLine("milestone policy %s not written: %s", path, exported.message());
+          } else {
+            LogLine("milestone: %lld env steps, policy exported to %s", static_cast<long long>(s.env_steps), path);
+          }
+        }
       },
       &g_stop);
   if (!status.ok()) return Fail(std::string(status.message()));

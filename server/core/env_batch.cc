@@ -1,5 +1,6 @@
 #include "server/core/env_batch.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "absl/status/status.h"
@@ -7,6 +8,20 @@
 #include "server/core/seed_mixing.h"
 
 namespace modskill {
+
+absl::Status ValidateTerminationDistance(double distance) {
+  if (!(std::isfinite(distance) && distance > 0 && distance <= kMaxTerminationDistance)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("termination_distance: ", distance, " m outside (0, ", kMaxTerminationDistance, "]"));
+  }
+  return absl::OkStatus();
+}
+
+absl::Status EnvBatch::SetTerminationDistance(double distance) {
+  if (absl::Status status = ValidateTerminationDistance(distance); !status.ok()) return status;
+  context_.config.termination_distance = distance;
+  return absl::OkStatus();
+}
 
 absl::StatusOr<std::unique_ptr<EnvBatch>> EnvBatch::Create(const EnvBatchConfig& config,
                                                            std::shared_ptr<const MotionLibrary> motions) {
@@ -32,9 +47,8 @@ absl::StatusOr<std::unique_ptr<EnvBatch>> EnvBatch::Create(const EnvBatchConfig&
     return absl::InvalidArgumentError(absl::StrCat("num_threads: ", config.num_threads, " outside [1, 256]"));
   }
   if (motions == nullptr || motions->size() == 0) return absl::InvalidArgumentError("motions: the library is empty");
-  if (!(config.env.termination_distance > 0)) {
-    return absl::InvalidArgumentError(absl::StrCat("termination_distance: ", config.env.termination_distance, " must be > 0"));
-  }
+  if (absl::Status status = ValidateTerminationDistance(config.env.termination_distance); !status.ok()) return status;
+  if (absl::Status status = config.env.action.Validate(); !status.ok()) return status;
   for (int c = 0; c < motions->size(); ++c) {
     if (motions->clip(c).num_bodies != humanoid->num_bodies()) {
       return absl::InvalidArgumentError(absl::StrCat("motions: clip '", motions->clip(c).name, "' has ",
@@ -47,6 +61,11 @@ absl::StatusOr<std::unique_ptr<EnvBatch>> EnvBatch::Create(const EnvBatchConfig&
   batch->context_.spec = std::make_shared<const EnvSpec>(MakeEnvSpec(*batch->context_.humanoid, layout));
   batch->context_.motions = std::move(motions);
   batch->context_.config = config.env;
+  const std::vector<int> feet = FootBodies(batch->context_.humanoid->spec());
+  for (int b = 0; b < batch->context_.humanoid->num_bodies(); ++b) {
+    const bool foot = std::find(feet.begin(), feet.end(), b) != feet.end();
+    if (config.env.termination_bodies == TerminationBodies::kAll || !foot) batch->context_.termination_body_ids.push_back(b);
+  }
   batch->context_.reference_amp =
       std::make_shared<const ReferenceAmpFrames>(*batch->context_.spec, *batch->context_.motions);
   batch->sampler_ = ClipSampler(batch->context_.motions->size());

@@ -18,6 +18,10 @@
 
 namespace modskill {
 
+inline constexpr double kMaxTerminationDistance = 100;  // m
+// A termination distance in (0, kMaxTerminationDistance] m.
+absl::Status ValidateTerminationDistance(double distance);
+
 struct EnvBatchConfig {
   int num_envs = 64;
   int num_threads = 1;
@@ -53,6 +57,10 @@ class EnvBatch {
   absl::Status SetMotions(std::shared_ptr<const MotionLibrary> motions, std::vector<int> clip_ids,
                           std::shared_ptr<const ReferenceAmpFrames> reference_amp, absl::Span<const double> weights);
   const ClipSampler& sampler() const { return sampler_; }
+  // The termination distance from the next step on (a curriculum; call between steps).
+  absl::Status SetTerminationDistance(double distance);
+  const TrackingEnvConfig& env_config() const { return context_.config; }
+  const std::vector<int>& termination_body_ids() const { return context_.termination_body_ids; }
 
   const BatchBuffers& buffers() const { return buffers_; }
   const EnvSpec& spec() const { return *context_.spec; }

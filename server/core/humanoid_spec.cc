@@ -243,4 +243,12 @@ absl::StatusOr<HumanoidSpec> HumanoidSpec::Scaled(const BodyScaling& scaling) co
   return out;
 }
 
+std::vector<int> FootBodies(const HumanoidSpec& spec) {
+  std::vector<int> feet;
+  for (int b = 0; b < spec.num_bodies(); ++b) {
+    if (absl::StrContains(spec.body(b).name, "Ankle") || absl::StrContains(spec.body(b).name, "Toe")) feet.push_back(b);
+  }
+  return feet;
+}
+
 }  // namespace modskill

@@ -79,6 +79,9 @@ class HumanoidSpec {
   std::vector<BodySpec> bodies_;
 };
 
+// The foot bodies: every body whose name holds "Ankle" or "Toe" (as FootContactRatio).
+std::vector<int> FootBodies(const HumanoidSpec& spec);
+
 }  // namespace modskill
 
 #endif  // MODSKILL_SERVER_CORE_HUMANOID_SPEC_H_

@@ -212,14 +212,6 @@ std::optional<PlausibilityVerdict> CheckDiscriminator(const std::vector<float>& 
 
 }  // namespace
 
-std::vector<int> FootBodies(const HumanoidSpec& spec) {
-  std::vector<int> feet;
-  for (int b = 0; b < spec.num_bodies(); ++b) {
-    if (absl::StrContains(spec.body(b).name, "Ankle") || absl::StrContains(spec.body(b).name, "Toe")) feet.push_back(b);
-  }
-  return feet;
-}
-
 double BodyGeomBottom(const HumanoidSpec& spec, const MotionClip& clip, int frame, int body) {
   const int i = frame * clip.num_bodies + body;
   return spec.body(body).geom.LowestPoint(clip.body_pos[i], clip.body_rot[i]);

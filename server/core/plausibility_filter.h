@@ -47,8 +47,6 @@ struct PlausibilityVerdict {
 // A foot is in contact while its geometry is this close to the floor (m), as in FootContactRatio.
 inline constexpr double kFootContactHeight = 0.03;
 
-// The foot bodies: every body whose name holds "Ankle" or "Toe" (as FootContactRatio).
-std::vector<int> FootBodies(const HumanoidSpec& spec);
 
 // Lowest z of one body's geometry in one frame (needs body_pos/body_rot); the per-body form of
 // LowestGeomPoint.

@@ -77,6 +77,7 @@ absl::StatusOr<std::vector<ClipRolloutMetrics>> RunRollout(std::shared_ptr<const
   config.num_threads = std::max(1, options.num_threads);
   config.env.termination = options.termination;
   config.env.termination_distance = options.termination_distance;
+  config.env.action = options.action;
   config.env.max_episode_steps = options.max_steps_per_clip;
   config.env.auto_reset = false;
   config.physics = options.physics;

@@ -17,6 +17,7 @@ namespace modskill {
 struct RolloutOptions {
   TerminationMode termination = TerminationMode::kEvaluation;
   double termination_distance = 0.5;  // m
+  ActionMapping action;               // the one the policy was trained with
   int max_steps_per_clip = 0;         // 0: the clip's length
   int num_threads = 1;
   PhysicsOptions physics;

@@ -75,12 +75,11 @@ void TrackingEnv::Step(const float* action, EnvRow row) {
   const HumanoidModel& humanoid = *context_->humanoid;
   const EnvSpec& spec = *context_->spec;
   const TrackingEnvConfig& config = context_->config;
-  const std::vector<double>& offset = humanoid.action_offset();
-  const std::vector<double>& scale = humanoid.action_scale();
-  for (int a = 0; a < spec.action_size; ++a) {
-    const int h = spec.action_hinge[a];
-    pd_targets_[h] = offset[h] + scale[h] * std::clamp(static_cast<double>(action[a]), -1.0, 1.0);
-  }
+  // Residual actions displace the reference pose of the frame this step reaches.
+  const MotionClip& motion = *motion_;
+  const int next_frame = std::min(frame_ + 1, motion.num_frames - 1);
+  MapActionToPdTargets(config.action, humanoid, spec, action,
+                       &motion.dof_pos[static_cast<size_t>(next_frame) * motion.num_hinges()], pd_targets_.data());
   const double power = pd_.Step(pd_targets_.data(), data_);
   ++episode_steps_;
   ++frame_;
@@ -115,18 +114,7 @@ void TrackingEnv::Step(const float* action, EnvRow row) {
   out.mean_body_error[i] = static_cast<float>(errors.mean_body_distance);
   WritePartErrors(&out.part_error[static_cast<size_t>(i) * out.num_parts]);
 
-  bool terminated = false;
-  switch (config.termination) {
-    case TerminationMode::kTraining:
-      terminated = errors.max_body_distance > config.termination_distance;
-      break;
-    case TerminationMode::kEvaluation:
-      terminated = errors.mean_body_distance > config.termination_distance;
-      break;
-    case TerminationMode::kNone:
-      break;
-  }
-  const MotionClip& motion = *motion_;
+  const bool terminated = Terminated(errors);
   const bool truncated = !terminated && (frame_ >= motion.num_frames - 1 ||
                                          (config.max_episode_steps > 0 && episode_steps_ >= config.max_episode_steps));
   out.done[i] = terminated || truncated;
@@ -142,6 +130,26 @@ void TrackingEnv::Step(const float* action, EnvRow row) {
   amp_head_ = (amp_head_ + kAmpHistory - 1) % kAmpHistory;
   WriteAmpFrame(spec, sim_, &amp_history_[static_cast<size_t>(amp_head_) * per_frame]);
   WriteObservation(row);
+}
+
+bool TrackingEnv::Terminated(const TrackingErrors& errors) const {
+  const TrackingEnvConfig& config = context_->config;
+  switch (config.termination) {
+    case TerminationMode::kTraining: {
+      // Never on the first step after a reset (PHC): the state there is the reference's own.
+      if (episode_steps_ <= 1) return false;
+      double farthest = 0;
+      for (int b : context_->termination_body_ids) {
+        farthest = std::max(farthest, (reference_.body_pos[b] - sim_.body_pos[b]).norm());
+      }
+      return farthest > config.termination_distance;
+    }
+    case TerminationMode::kEvaluation:
+      return errors.mean_body_distance > config.termination_distance;
+    case TerminationMode::kNone:
+      return false;
+  }
+  return false;
 }
 
 void TrackingEnv::WritePartErrors(float* part_error) const {

@@ -10,6 +10,7 @@
 
 #include <mujoco/mujoco.h>
 
+#include "server/core/action_mapping.h"
 #include "server/core/batch_buffers.h"
 #include "server/core/clip_sampler.h"
 #include "server/core/env_spec.h"
@@ -28,9 +29,17 @@ enum class TerminationMode {
   kNone,        // only truncation at the clip's end
 };
 
+// Which bodies training termination watches.
+enum class TerminationBodies {
+  kAll,
+  kNoFeet,  // every body but the ankles and toes (PHC): feet slip without the character falling
+};
+
 struct TrackingEnvConfig {
   TerminationMode termination = TerminationMode::kTraining;
   double termination_distance = 0.25;  // m
+  TerminationBodies termination_bodies = TerminationBodies::kAll;  // kTraining only
+  ActionMapping action;
   ImitationRewardConfig reward;
   int max_episode_steps = 0;  // 0: until the clip ends
   bool random_start_frame = true;
@@ -50,6 +59,8 @@ struct EnvContext {
   const ClipSampler* sampler = nullptr;
   std::shared_ptr<const ReferenceAmpFrames> reference_amp;
   TrackingEnvConfig config;
+  // The bodies training termination watches (config.termination_bodies), spec order.
+  std::vector<int> termination_body_ids;
 };
 
 // Where env i writes in a BatchBuffers.
@@ -92,6 +103,8 @@ class TrackingEnv {
   // Mean body distance per part of the layout between sim_ and reference_ (one float per part).
   void WritePartErrors(float* part_error) const;
   bool PhysicsDiverged() const;
+  // Whether the state just reached (sim_ against reference_) ends the episode as a failure.
+  bool Terminated(const TrackingErrors& errors) const;
 
   const EnvContext* context_;
   mjData* data_;

@@ -33,6 +33,8 @@ std::string PolicySpec::ToJson() const {
   json["action_size"] = action_size;
   json["joint_names"] = joint_names;
   json["control_dt"] = control_dt;
+  json["action_mode"] = ActionModeName(action.mode);
+  json["residual_scale"] = action.residual_scale;
   return json.dump(1);
 }
 
@@ -48,8 +50,17 @@ absl::StatusOr<PolicySpec> PolicySpec::FromJson(absl::string_view text) {
     spec.action_size = json.at("action_size").get<int>();
     spec.joint_names = json.at("joint_names").get<std::vector<std::string>>();
     spec.control_dt = json.at("control_dt").get<double>();
+    if (json.contains("action_mode")) {
+      auto mode = ParseActionMode(json.at("action_mode").get<std::string>());
+      if (!mode.ok()) return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": action_mode: ", mode.status().message()));
+      spec.action.mode = *mode;
+    }
+    if (json.contains("residual_scale")) spec.action.residual_scale = json.at("residual_scale").get<double>();
   } catch (const nlohmann::json::exception& e) {
     return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": ", e.what()));
+  }
+  if (absl::Status status = spec.action.Validate(); !status.ok()) {
+    return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": ", status.message()));
   }
   return spec;
 }
@@ -69,8 +80,8 @@ absl::Status PolicySpec::CheckCompatible(const EnvSpec& server) const {
   return absl::OkStatus();
 }
 
-absl::Status SaveAffinePolicy(const std::string& path, const PolicySpec& spec, const std::vector<float>& weight,
-                              const std::vector<float>& bias) {
+absl::StatusOr<std::string> AffinePolicyBytes(const PolicySpec& spec, const std::vector<float>& weight,
+                                              const std::vector<float>& bias) {
   const int64_t obs = spec.obs_size, act = spec.action_size;
   if (!weight.empty() && weight.size() != static_cast<size_t>(obs * act)) {
     return absl::InvalidArgumentError(absl::StrCat("weight: ", weight.size(), " values, expected ", obs * act));
@@ -90,11 +101,18 @@ def forward(self, obs):
 )");
     std::ostringstream out(std::ios::binary);
     module.save(out, {{kCheckpointSpecFile, spec.ToJson()}});
-    return WriteFileAtomically(path, out.str());
+    return out.str();
   } catch (const std::exception& e) {
     std::string message = e.what();
-    return absl::InternalError(absl::StrCat("SaveAffinePolicy: ", message.substr(0, message.find('\n'))));
+    return absl::InternalError(absl::StrCat("AffinePolicyBytes: ", message.substr(0, message.find('\n'))));
   }
+}
+
+absl::Status SaveAffinePolicy(const std::string& path, const PolicySpec& spec, const std::vector<float>& weight,
+                              const std::vector<float>& bias) {
+  auto bytes = AffinePolicyBytes(spec, weight, bias);
+  if (!bytes.ok()) return bytes.status();
+  return WriteFileAtomically(path, *bytes);
 }
 
 void SetTorchThreads(int threads) {

@@ -12,6 +12,7 @@
 
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
+#include "server/core/action_mapping.h"
 #include "server/core/env_spec.h"
 
 namespace torch::jit {
@@ -29,6 +30,9 @@ struct PolicySpec {
   int action_size = 0;
   std::vector<std::string> joint_names;  // action order
   double control_dt = 0;
+  // The action mapping it was trained with; checkpoints from before action modes existed
+  // were trained in absolute mode.
+  ActionMapping action;
 
   static PolicySpec FromEnvSpec(const EnvSpec& spec);
   std::string ToJson() const;
@@ -42,6 +46,10 @@ struct PolicySpec {
 // and a fixture: the zero policy holds every joint at its range midpoint.
 absl::Status SaveAffinePolicy(const std::string& path, const PolicySpec& spec, const std::vector<float>& weight,
                               const std::vector<float>& bias);
+// The same archive as bytes (for Rollout.checkpoint_bytes). With spec.action in residual mode
+// the zero policy is the open-loop reference: PD targets = the reference pose.
+absl::StatusOr<std::string> AffinePolicyBytes(const PolicySpec& spec, const std::vector<float>& weight,
+                                              const std::vector<float>& bias);
 
 // Torch's intra-op threads for every checkpoint of the process.
 void SetTorchThreads(int threads);

@@ -51,6 +51,42 @@ absl::StatusOr<double> ToTerminationDistance(float distance, TerminationMode mod
   return mode == TerminationMode::kEvaluation ? 0.5 : 0.25;
 }
 
+absl::StatusOr<ActionMapping> ToActionMapping(v1::ActionMode mode, float residual_scale) {
+  ActionMapping mapping;
+  switch (mode) {
+    case v1::ACTION_MODE_UNSPECIFIED:
+    case v1::ABSOLUTE:
+      mapping.mode = ActionMode::kAbsolute;
+      break;
+    case v1::RESIDUAL:
+      mapping.mode = ActionMode::kResidual;
+      break;
+    default:
+      return absl::InvalidArgumentError(absl::StrCat("action_mode: unknown value ", static_cast<int>(mode)));
+  }
+  if (mapping.mode == ActionMode::kAbsolute) {
+    if (residual_scale != 0) return absl::InvalidArgumentError("residual_scale: set, but action_mode is not RESIDUAL");
+    return mapping;
+  }
+  if (residual_scale != 0) mapping.residual_scale = residual_scale;  // 0: the default
+  if (absl::Status status = mapping.Validate(); !status.ok()) return status;
+  return mapping;
+}
+
+absl::StatusOr<TerminationBodies> ToTerminationBodies(v1::TerminationBodies bodies) {
+  switch (bodies) {
+    case v1::TERMINATION_BODIES_UNSPECIFIED:
+    case v1::ALL:
+      return TerminationBodies::kAll;
+    case v1::NO_FEET:
+      return TerminationBodies::kNoFeet;
+    default:
+      return absl::InvalidArgumentError(absl::StrCat("termination_bodies: unknown value ", static_cast<int>(bodies)));
+  }
+}
+
+v1::ActionMode ToProto(ActionMode mode) { return mode == ActionMode::kResidual ? v1::RESIDUAL : v1::ABSOLUTE; }
+
 void ToProto(const std::vector<std::string>& part_names, const VariantProvenance& provenance,
              v1::ClipProvenance* out) {
   out->set_parent(provenance.parent);
@@ -168,6 +204,9 @@ grpc::Status SimulationService::Describe(grpc::ServerContext* context, const v1:
   if (!layout.ok()) return ToGrpcStatus(layout.status());
   ToProto(MakeEnvSpec(*humanoid_, *layout), *humanoid_, response);
   for (const std::string& name : layouts_->Names()) response->add_part_layouts(name);
+  for (const std::string& name : ActionModeNames()) response->add_action_modes(name);
+  response->add_termination_bodies("all");
+  response->add_termination_bodies("no_feet");
   response->set_num_motions(motions_.Snapshot()->size());
   return grpc::Status::OK;
 }
@@ -198,6 +237,10 @@ grpc::Status SimulationService::Simulate(grpc::ServerContext* context,
   if (!termination.ok()) return ToGrpcStatus(termination.status());
   auto distance = ToTerminationDistance(config.termination_distance(), *termination);
   if (!distance.ok()) return ToGrpcStatus(distance.status());
+  auto action_mapping = ToActionMapping(config.action_mode(), config.residual_scale());
+  if (!action_mapping.ok()) return ToGrpcStatus(action_mapping.status());
+  auto termination_bodies = ToTerminationBodies(config.termination_bodies());
+  if (!termination_bodies.ok()) return ToGrpcStatus(termination_bodies.status());
   int amp_frames = kAmpHistory;
   if (config.amp_obs() == v1::NEWEST) amp_frames = 1;
   if (config.amp_obs() == v1::OMIT) amp_frames = 0;
@@ -218,6 +261,8 @@ grpc::Status SimulationService::Simulate(grpc::ServerContext* context,
   batch_config.seed = config.seed();
   batch_config.env.termination = *termination;
   batch_config.env.termination_distance = *distance;
+  batch_config.env.termination_bodies = *termination_bodies;
+  batch_config.env.action = *action_mapping;
   batch_config.env.max_episode_steps = config.max_episode_steps();
   auto batch = EnvBatch::Create(batch_config, humanoid_, *layout, motions);
   if (!batch.ok()) {
@@ -262,6 +307,13 @@ grpc::Status SimulationService::Simulate(grpc::ServerContext* context,
       if (absl::Status status = ReadFloatTensor(request.actions(), "actions", {n, action_size}, &actions); !status.ok()) {
         result = ToGrpcStatus(status);
         break;
+      }
+      if (request.termination_distance() != 0 &&
+          request.termination_distance() != envs.env_config().termination_distance) {
+        if (absl::Status status = envs.SetTerminationDistance(request.termination_distance()); !status.ok()) {
+          result = ToGrpcStatus(status);
+          break;
+        }
       }
       // New sampling weights (ReportFailures) and clips (generation rounds) take effect here,
       // between two steps: this thread alone steps the batch, so no env is drawing a clip meanwhile.
@@ -380,6 +432,16 @@ grpc::Status SimulationService::Rollout(grpc::ServerContext* context, const v1::
   }
   const EnvSpec spec = MakeEnvSpec(*humanoid_, *layout);
   if (absl::Status status = (*policy)->spec().CheckCompatible(spec); !status.ok()) return ToGrpcStatus(status);
+  const ActionMapping& trained_mapping = (*policy)->spec().action;
+  if (!v1::ActionMode_IsValid(request->action_mode())) {
+    return Error(grpc::StatusCode::INVALID_ARGUMENT,
+                 absl::StrCat("action_mode: unknown value ", static_cast<int>(request->action_mode())));
+  }
+  if (request->action_mode() != v1::ACTION_MODE_UNSPECIFIED && request->action_mode() != ToProto(trained_mapping.mode)) {
+    return Error(grpc::StatusCode::FAILED_PRECONDITION,
+                 absl::StrCat("action_mode: the checkpoint was trained in ", ActionModeName(trained_mapping.mode),
+                              " mode; it cannot run in ", v1::ActionMode_Name(request->action_mode())));
+  }
   if (request->max_steps_per_clip() < 0) return Error(grpc::StatusCode::INVALID_ARGUMENT, "max_steps_per_clip: < 0");
 
   std::shared_ptr<const MotionLibrary> motions = motions_.Snapshot();
@@ -399,6 +461,7 @@ grpc::Status SimulationService::Rollout(grpc::ServerContext* context, const v1::
   RolloutOptions options;
   options.termination = *termination;
   options.termination_distance = *distance;
+  options.action = trained_mapping;
   options.max_steps_per_clip = request->max_steps_per_clip();
   options.num_threads = options_.threads_per_session;
   options.physics = options_.physics;

@@ -1,0 +1,73 @@
+#!/usr/bin/env python3
+"""Summarizes a bench/learning_bench.sh output directory as a Markdown table.
+
+One row per variant and evaluated policy (the final policy.pt and any policy_at_<N>M.pt
+milestone), plus the open-loop reference baseline: env steps and wall time trained, the mean
+training episode length at that point, and the evaluation (paper protocol: a clip fails when its
+mean body error exceeds 0.5 m) success rate, E_mpjpe and E_g-mpjpe.
+
+    /usr/bin/python3 bench/learning_table.py OUT_DIR NAME [NAME ...]
+"""
+import csv
+import glob
+import json
+import os
+import re
+import sys
+
+
+def progress(run_dir):
+    path = os.path.join(run_dir, "progress.csv")
+    if not os.path.exists(path):
+        return []
+    with open(path, newline="") as f:
+        return [{k: float(v) for k, v in row.items() if v not in ("", None)} for row in csv.DictReader(f)]
+
+
+def row_at(rows, steps):
+    """The last progress row at or before `steps` env steps (None: the last row)."""
+    if not rows:
+        return {}
+    if steps is None:
+        return rows[-1]
+    before = [r for r in rows if r["env_steps"] <= steps * 1.02]
+    return before[-1] if before else rows[0]
+
+
+def episode_length(rows, row):
+    """Mean of the last 10 iterations' mean episode length up to `row` (one iteration is noisy)."""
+    upto = [r for r in rows if r["env_steps"] <= row.get("env_steps", 0)][-10:]
+    return sum(r["episode_length"] for r in upto) / max(1, len(upto))
+
+
+def main():
+    if len(sys.argv) < 3:
+        raise SystemExit(__doc__)
+    out, names = sys.argv[1], sys.argv[2:]
+    lines = ["| variant | policy at | env steps | train minutes | episode length (train, last 10 it.) | "
+             "eval Succ | E_mpjpe (mm) | E_g-mpjpe (mm) |",
+             "|---|---|---|---|---|---|---|---|"]
+    for name in names:
+        rows = progress(os.path.join(out, name))
+        for eval_json in sorted(glob.glob(os.path.join(out, name, "eval*", "eval.json"))):
+            tag = os.path.basename(os.path.dirname(eval_json))
+            milestone = re.match(r"eval_at_([0-9.e+]+)M$", tag)
+            steps = float(milestone.group(1)) * 1e6 if milestone else None
+            row = row_at(rows, steps)
+            with open(eval_json) as f:
+                ev = json.load(f)
+            lines.append("| %s | %s | %.2f M | %.1f | %.1f | %.0f %% | %.1f | %.1f |" % (
+                name, f"{milestone.group(1)} M" if milestone else "end", row.get("env_steps", 0) / 1e6,
+                row.get("wall_seconds", 0) / 60, episode_length(rows, row) if rows else 0,
+                100 * ev["success_rate"], ev["mpjpe_mm"], ev["g_mpjpe_mm"]))
+    baseline = os.path.join(out, "baseline", "eval.json")
+    if os.path.exists(baseline):
+        with open(baseline) as f:
+            ev = json.load(f)
+        lines.append("| open-loop reference (no learning) | - | 0 | 0 | - | %.0f %% | %.1f | %.1f |" % (
+            100 * ev["success_rate"], ev["mpjpe_mm"], ev["g_mpjpe_mm"]))
+    print("\n".join(lines))
+
+
+if __name__ == "__main__":
+    main()
