@@ -205,7 +205,10 @@ struct Trainer::TrainingBatch {
   torch::Tensor obs;  // normalized with the statistics of the iteration's start
   torch::Tensor actions, old_log_prob, old_values, advantages, returns;
   torch::Tensor raw_obs;      // for the normalizer
-  torch::Tensor policy_amp;   // AMP observations of live (not ended) rows
+  // AMP observations of live (not ended) rows drawn at random for the discriminator,
+  // [amp_samples * discriminator_epochs, M]: copying all T * N rows of 2320 floats cost more
+  // than the discriminator step itself.
+  torch::Tensor policy_amp;
   double task_sum = 0, amp_sum = 0, samples = 0;
   torch::Tensor terms_sum;
   int live_sessions = 0;
@@ -364,11 +367,12 @@ void Trainer::RecordStep(SlotRollout& r, int t) {
 
 Trainer::TrainingBatch Trainer::ComputeReturns(const std::vector<SlotRollout*>& usable) {
   torch::NoGradGuard no_grad;
+  const ScopedTorchThreads threads(config_.update_threads);  // the servers wait from here on
   const int T = config_.horizon;
   const int64_t O = layout_.obs_size, A = layout_.action_size, M = layout_.amp_obs_size;
   TrainingBatch batch;
   batch.terms_sum = torch::zeros({spec_.reward_terms_size()}, torch::kFloat64);
-  std::vector<torch::Tensor> obs, actions, log_prob, values, advantages, returns, policy_amp, raw_obs;
+  std::vector<torch::Tensor> obs, actions, log_prob, values, advantages, returns, raw_obs, amp_rows, live_rows;
   for (SlotRollout* r : usable) {
     // Reward: the server's task reward (imitation + energy) and the AMP style reward.
     const torch::Tensor amp_flat = r->amp_next.reshape({-1, M});
@@ -388,7 +392,8 @@ Trainer::TrainingBatch Trainer::ComputeReturns(const std::vector<SlotRollout*>& 
     values.push_back(r->values.reshape({-1}));
     advantages.push_back(slot_advantages.reshape({-1}));
     returns.push_back(slot_returns.reshape({-1}));
-    policy_amp.push_back(amp_flat.index({(r->dones.reshape({-1}) < 0.5)}));
+    amp_rows.push_back(amp_flat);
+    live_rows.push_back((r->dones.reshape({-1}) < 0.5).nonzero().squeeze(1));
     raw_obs.insert(raw_obs.end(), r->raw_obs.begin(), r->raw_obs.end());
     batch.task_sum += r->task_reward.sum().item<double>();
     batch.amp_sum += amp_reward.sum().item<double>();
@@ -401,10 +406,29 @@ Trainer::TrainingBatch Trainer::ComputeReturns(const std::vector<SlotRollout*>& 
   batch.old_values = torch::cat(values);
   batch.advantages = NormalizeAdvantages(torch::cat(advantages));
   batch.returns = torch::cat(returns);
-  batch.policy_amp = torch::cat(policy_amp);
+  batch.policy_amp = SampleLiveAmp(amp_rows, live_rows);
   batch.raw_obs = torch::cat(raw_obs);
   batch.live_sessions = static_cast<int>(usable.size());
   return batch;
+}
+
+torch::Tensor Trainer::SampleLiveAmp(const std::vector<torch::Tensor>& amp_rows,
+                                    const std::vector<torch::Tensor>& live_rows) {
+  int64_t live = 0;
+  for (const torch::Tensor& rows : live_rows) live += rows.size(0);
+  if (live == 0) return torch::zeros({0, layout_.amp_obs_size});
+  const int64_t wanted = static_cast<int64_t>(config_.amp_samples) * config_.discriminator_epochs;
+  const torch::Tensor pick = torch::randint(live, {wanted}, generator_, torch::kLong);
+  std::vector<torch::Tensor> picked;
+  int64_t offset = 0;
+  for (size_t s = 0; s < amp_rows.size(); ++s) {
+    const int64_t count = live_rows[s].size(0);
+    const torch::Tensor mine = pick.masked_select((pick >= offset) & (pick < offset + count)) - offset;
+    picked.push_back(amp_rows[s].index_select(0, live_rows[s].index_select(0, mine)));
+    offset += count;
+  }
+  const torch::Tensor samples = torch::cat(picked);  // grouped by session: shuffle
+  return samples.index_select(0, torch::randperm(samples.size(0), generator_));
 }
 
 // PPO (Schulman et al. 2017). A non-finite loss skips its minibatch; non-finite weights after the
@@ -482,9 +506,9 @@ void Trainer::UpdateDiscriminator(const TrainingBatch& batch, SessionSlot* sourc
   amp_norm_->Update(torch::cat({expert, batch.policy_amp}));
   double loss_sum = 0, expert_logit = 0, policy_logit = 0, penalty = 0;
   for (int epoch = 0; epoch < config_.discriminator_epochs; ++epoch) {
-    const torch::Tensor pick = torch::randint(batch.policy_amp.size(0), {config_.amp_samples}, generator_, torch::kLong);
     const torch::Tensor expert_in = amp_norm_->Normalize(expert).detach().requires_grad_(true);
-    const torch::Tensor policy_in = amp_norm_->Normalize(batch.policy_amp.index_select(0, pick));
+    const torch::Tensor policy_in =
+        amp_norm_->Normalize(batch.policy_amp.slice(0, epoch * config_.amp_samples, (epoch + 1) * config_.amp_samples));
     const torch::Tensor gradient_penalty = discriminator_->GradientPenalty(expert_in);
     AmpLossTerms loss = ComputeAmpLoss(discriminator_->forward(expert_in), discriminator_->forward(policy_in),
                                        gradient_penalty, config_.gradient_penalty_weight);

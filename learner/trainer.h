@@ -87,6 +87,9 @@ class Trainer {
   void RecordStep(SlotRollout& r, int t);
   // AMP rewards, then GAE per session; concatenates the sessions' experience.
   TrainingBatch ComputeReturns(const std::vector<SlotRollout*>& usable);
+  // amp_samples x discriminator_epochs random rows of `amp_rows` (one tensor per session) among
+  // its `live_rows` (indices of rows whose episode did not end).
+  torch::Tensor SampleLiveAmp(const std::vector<torch::Tensor>& amp_rows, const std::vector<torch::Tensor>& live_rows);
   void UpdatePolicy(const TrainingBatch& batch, IterationStats* stats);
   // Reference AMP samples from `source`'s server against the policy's own.
   void UpdateDiscriminator(const TrainingBatch& batch, SessionSlot* source, IterationStats* stats);

@@ -231,6 +231,29 @@ void ExpectRoundTrip(const std::string& source_path, const std::string& clip_fil
 
 TEST(MotionImportRoundTrip, CmuBvh) { ExpectRoundTrip(kCmuBvh, "cmu.msclip"); }
 
+// CMU takes start with the actor's calibration pose; the importer drops it, so the clip's first
+// frame is already the take (a reset to frame 0 no longer starts from a T-pose).
+TEST(CmuCalibrationFrame, IsDroppedAndTheTakeStartsSmoothly) {
+  auto bvh = ReadBvhFile(kCmuBvh);
+  ASSERT_TRUE(bvh.ok()) << bvh.status();
+  EXPECT_EQ(LeadingCalibrationFrames(*bvh), 1);
+  BvhClip take = *bvh;  // the same take without its calibration frame has none
+  take.num_frames -= 1;
+  take.root_translation.erase(take.root_translation.begin());
+  take.local_rotation.erase(take.local_rotation.begin(), take.local_rotation.begin() + take.num_joints());
+  EXPECT_EQ(LeadingCalibrationFrames(take), 0);
+  auto clip = ImportMotionFile(kCmuBvh, Spec());
+  ASSERT_TRUE(clip.ok()) << clip.status();
+  // Body positions move a few centimetres per frame at 30 fps from the first frame on.
+  for (int frame : {0, 1, 40}) {
+    double moved = 0;
+    for (int b = 0; b < clip->num_bodies; ++b) {
+      moved += (clip->body_pos[(frame + 1) * clip->num_bodies + b] - clip->body_pos[frame * clip->num_bodies + b]).norm();
+    }
+    EXPECT_LT(moved / clip->num_bodies, 0.05) << frame;
+  }
+}
+
 TEST(MotionImportRoundTrip, DeepMimic) { ExpectRoundTrip(kDeepMimicWalk, "walk.msclip"); }
 
 TEST(MotionImportRoundTrip, AmassSmplFloat32) {

@@ -1,4 +1,6 @@
 // CMU BVH (31-joint cgspeed skeleton, y-up, ZYX Euler degrees) retargeted onto the humanoid.
+#include <cmath>
+
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
 #include "server/core/bvh_parser.h"
@@ -74,12 +76,41 @@ RetargetMap WithMaxNames(RetargetMap map) {
   return map;
 }
 
+// Mean rotation angle (rad) between the local joint rotations of frames a and b.
+double MeanJointTurn(const BvhClip& bvh, int a, int b) {
+  double total = 0;
+  for (int j = 0; j < bvh.num_joints(); ++j) total += bvh.LocalRotation(a, j).angularDistance(bvh.LocalRotation(b, j));
+  return total / bvh.num_joints();
+}
+
 }  // namespace
+
+int LeadingCalibrationFrames(const BvhClip& bvh) {
+  // CMU's first frame is the actor's calibration pose (most joint angles zero), then the take
+  // starts: a jump of ~10 degrees per joint between frames 0 and 1 against a fraction of a degree
+  // between the frames after. Left in, every episode and evaluation that starts at frame 0
+  // starts from a pose the take never passes through.
+  constexpr double kMinJump = 5.0 * M_PI / 180, kJumpOverMotion = 10;
+  int dropped = 0;
+  while (dropped < 3 && bvh.num_frames - dropped >= 4) {
+    const double jump = MeanJointTurn(bvh, dropped, dropped + 1);
+    const double motion = MeanJointTurn(bvh, dropped + 1, dropped + 2);
+    if (!(jump > kMinJump && jump > kJumpOverMotion * motion)) break;
+    ++dropped;
+  }
+  return dropped;
+}
 
 absl::StatusOr<MotionClip> ImportCmuBvh(const std::string& path, const HumanoidSpec& spec) {
   auto bvh = ReadBvhFile(path);
   if (!bvh.ok()) return bvh.status();
   if (!(bvh->frame_time > 0)) return absl::InvalidArgumentError(absl::StrCat(path, ": Frame Time must be > 0"));
+  if (const int calibration = LeadingCalibrationFrames(*bvh); calibration > 0) {
+    bvh->num_frames -= calibration;
+    bvh->root_translation.erase(bvh->root_translation.begin(), bvh->root_translation.begin() + calibration);
+    bvh->local_rotation.erase(bvh->local_rotation.begin(),
+                              bvh->local_rotation.begin() + static_cast<size_t>(calibration) * bvh->num_joints());
+  }
   RetargetSource source;
   source.what = path;
   source.num_frames = bvh->num_frames;

@@ -7,6 +7,7 @@
 
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
+#include "server/core/bvh_parser.h"
 #include "server/core/humanoid_spec.h"
 #include "server/core/motion_clip.h"
 
@@ -27,7 +28,11 @@ absl::StatusOr<MotionClip> ImportMotionFile(const std::string& path, const Human
 
 // The raw importers: clip at the file's own rate, on the humanoid, kinematics not yet computed.
 absl::StatusOr<MotionClip> ImportAmassNpz(const std::string& path, const HumanoidSpec& spec);
+// Drops the leading calibration frame CMU takes start with (see LeadingCalibrationFrames).
 absl::StatusOr<MotionClip> ImportCmuBvh(const std::string& path, const HumanoidSpec& spec);
+// How many leading frames of `bvh` are a calibration pose: each differs from the next by far more
+// than the take then moves per frame.
+int LeadingCalibrationFrames(const BvhClip& bvh);
 absl::StatusOr<MotionClip> ImportDeepMimic(const std::string& path, const HumanoidSpec& spec);
 absl::StatusOr<MotionClip> ImportDeepMimicText(absl::string_view text, absl::string_view what,
                                                const HumanoidSpec& spec);

@@ -201,6 +201,35 @@ class ClientTest(unittest.TestCase):
         with self.assertRaisesRegex(ValueError, "termination"):
             self.client.session(1, termination="never")
 
+    def test_action_modes_and_termination_distance(self):
+        self.assertEqual(list(self.client.describe().action_modes), ["absolute", "residual"])
+        zeros = np.zeros((2, 69), np.float32)
+        kwargs = dict(motions=["deepmimic_walk"], seed=4, termination_distance=100.0)
+        # Zero residual actions track the reference open loop; zero absolute ones fall.
+        with self.client.session(2, action_mode="residual", termination_bodies="no_feet", **kwargs) as residual, \
+                self.client.session(2, **kwargs) as absolute:
+            for _ in range(6):
+                tracked = residual.step(zeros).mean_body_error
+                fell = absolute.step(zeros).mean_body_error
+            self.assertLess(tracked.mean(), 0.5 * fell.mean())
+            # A tighter distance from this step on: the next steps terminate.
+            ended = np.zeros(2, bool)
+            for _ in range(3):
+                result = absolute.step(zeros, termination_distance=0.001)
+                ended |= result.done & ~result.truncated
+            self.assertTrue(ended.all())
+        with self.assertRaises(modskill.ServerError) as caught:
+            with self.client.session(1, action_mode="residual", residual_scale=-1.0) as session:
+                session.step(np.zeros((1, 69), np.float32))
+        self.assertIn("residual_scale", caught.exception.message)
+        with self.assertRaisesRegex(ValueError, "action_mode"):
+            self.client.session(1, action_mode="sideways")
+        # The zero-policy checkpoint was made in absolute mode: insisting on residual is refused.
+        with self.assertRaises(modskill.ServerError) as caught:
+            self.client.rollout(CHECKPOINT, clips=["deepmimic_walk"], action_mode="residual")
+        self.assertEqual(caught.exception.code, grpc.StatusCode.FAILED_PRECONDITION)
+        self.assertIn("action_mode", caught.exception.message)
+
     def test_wrong_actions_raise_value_error(self):
         with self.client.session(2) as session:
             with self.assertRaises(ValueError) as caught:

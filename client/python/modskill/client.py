@@ -42,6 +42,8 @@ PathLike = Union[str, "os.PathLike[str]"]
 
 _TERMINATION = {"training": pb.TRAINING, "evaluation": pb.EVALUATION, "none": pb.NONE}
 _AMP_OBS = {"full": pb.FULL, "newest": pb.NEWEST, "omit": pb.OMIT}
+_ACTION_MODE = {"absolute": pb.ABSOLUTE, "residual": pb.RESIDUAL}
+_TERMINATION_BODIES = {"all": pb.ALL, "no_feet": pb.NO_FEET}
 
 
 def _enum(value: Union[str, int], table: Mapping[str, int], what: str) -> int:
@@ -206,7 +208,8 @@ class Client:
     def rollout(self, checkpoint: Optional[PathLike] = None, checkpoint_bytes: Optional[bytes] = None,
                 clips: Sequence[str] = (), frames: bool = False, *, server_checkpoint: Optional[str] = None,
                 termination: Union[str, int] = "evaluation", termination_distance: float = 0.0,
-                max_steps_per_clip: int = 0, timeout: Optional[float] = None) -> List[ClipRollout]:
+                max_steps_per_clip: int = 0, action_mode: Optional[Union[str, int]] = None,
+                timeout: Optional[float] = None) -> List[ClipRollout]:
         """Runs a TorchScript policy checkpoint on clips and returns one :class:`ClipRollout` per clip.
 
         Give exactly one of:
@@ -222,6 +225,8 @@ class Client:
           termination: "evaluation" (default: mean body error above 0.5 m), "training" or "none".
           termination_distance: metres; 0: the mode's default.
           max_steps_per_clip: 0: the clip's length.
+          action_mode: None runs the policy in the mode recorded in its checkpoint; "absolute" or
+            "residual" insists on one (a checkpoint trained in the other is refused).
           timeout: deadline in seconds (default: none).
         """
         given = [x is not None for x in (checkpoint, checkpoint_bytes, server_checkpoint)]
@@ -233,6 +238,8 @@ class Client:
                                     termination=_enum(termination, _TERMINATION, "termination"),
                                     termination_distance=termination_distance,
                                     max_steps_per_clip=max_steps_per_clip)
+        if action_mode is not None:
+            request.action_mode = _enum(action_mode, _ACTION_MODE, "action_mode")
         if checkpoint is not None:
             with open(checkpoint, "rb") as f:
                 request.checkpoint_bytes = f.read()
@@ -269,7 +276,9 @@ class Client:
 
     def session(self, num_envs: int, seed: int = 0, part_layout: str = "", motions: Sequence[str] = (),
                 termination: Union[str, int] = "training", amp_obs: Union[str, int] = "full", *,
-                termination_distance: float = 0.0, max_episode_steps: int = 0) -> "Session":
+                termination_distance: float = 0.0, max_episode_steps: int = 0,
+                action_mode: Union[str, int] = "absolute", residual_scale: float = 0.0,
+                termination_bodies: Union[str, int] = "all") -> "Session":
         """Opens a simulation session of ``num_envs`` envs and returns it once the server has
         reset them (``Session.initial`` holds the first observations).
 
@@ -283,6 +292,10 @@ class Client:
           amp_obs: "full" (``amp_history`` frames per env, newest first), "newest" or "omit".
           termination_distance: metres; 0: the mode's default.
           max_episode_steps: 0: until the clip ends.
+          action_mode: "absolute" (PD target = offset + scale * a) or "residual" (the reference
+            pose of the next frame + residual_scale * scale * a: zero actions track open loop).
+          residual_scale: residual mode only; 0: the server's default (0.5).
+          termination_bodies: "all" or "no_feet" (training termination ignores ankles and toes).
 
         Use it as a context manager (or call ``close()``) so that the server frees the envs.
         """
@@ -292,7 +305,11 @@ class Client:
                                   motions=list(motions), termination=_enum(termination, _TERMINATION, "termination"),
                                   termination_distance=termination_distance,
                                   max_episode_steps=int(max_episode_steps),
-                                  amp_obs=_enum(amp_obs, _AMP_OBS, "amp_obs"))
+                                  amp_obs=_enum(amp_obs, _AMP_OBS, "amp_obs"),
+                                  action_mode=_enum(action_mode, _ACTION_MODE, "action_mode"),
+                                  residual_scale=residual_scale,
+                                  termination_bodies=_enum(termination_bodies, _TERMINATION_BODIES,
+                                                           "termination_bodies"))
         session = Session(self, config)
         self._sessions.add(session)
         return session
@@ -372,15 +389,16 @@ class Session:
             raise ValueError(f"actions: non-finite value {actions[row, col]} at [{row}, {col}]")
         return actions
 
-    def step(self, actions: np.ndarray) -> StepResult:
+    def step(self, actions: np.ndarray, termination_distance: float = 0.0) -> StepResult:
         """Sends a batch of actions (float [num_envs, action_size], clipped to [-1, 1] by the
-        server) and returns the resulting :class:`StepResult`."""
+        server) and returns the resulting :class:`StepResult`. A termination_distance > 0 (m)
+        becomes the session's from this step on (a curriculum); 0 keeps it."""
         actions = self.check_actions(actions)
         with self._lock:
             if self._closed:
                 raise RuntimeError(f"session {self.session_id}: closed"
                                    + (f" after an error ({self._error})" if self._error else ""))
-            request = pb.SimulateRequest()
+            request = pb.SimulateRequest(termination_distance=termination_distance)
             tensors.encode(actions, request.actions)
             self._requests.put(request)
             step = self._receive("step").step

@@ -58,6 +58,8 @@ class EnvSpec:
     part_layouts: Tuple[str, ...]  # layouts the server offers (Describe only)
     reward_terms: Tuple[str, ...]  # columns of StepResult.reward_terms
     num_motions: int
+    action_modes: Tuple[str, ...]  # "absolute", "residual" (Describe only)
+    termination_bodies: Tuple[str, ...]  # "all", "no_feet" (Describe only)
     action_offset: np.ndarray = dataclasses.field(repr=False, compare=False)  # PD target = offset + scale * a
     action_scale: np.ndarray = dataclasses.field(repr=False, compare=False)
 
@@ -86,6 +88,8 @@ class EnvSpec:
             part_layouts=tuple(spec.part_layouts),
             reward_terms=tuple(spec.reward_terms),
             num_motions=spec.num_motions,
+            action_modes=tuple(spec.action_modes),
+            termination_bodies=tuple(spec.termination_bodies),
             action_offset=np.array(spec.action_offset, dtype=np.float32),
             action_scale=np.array(spec.action_scale, dtype=np.float32),
         )
