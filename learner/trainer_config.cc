@@ -2,10 +2,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include <cmath>
-
 #include "absl/strings/str_cat.h"
 #include "server/core/action_mapping.h"
+#include "server/core/env_batch.h"
 
 namespace modskill::learner {
 
@@ -57,17 +56,17 @@ absl::Status TrainerConfig::Validate() const {
   if (absl::Status status = ActionMapping{*mode, residual_scale}.Validate("--residual_scale"); !status.ok()) {
     return status;
   }
-  if (!(std::isfinite(termination_distance) && termination_distance > 0 && termination_distance <= 100)) {
-    return bad("termination_distance", termination_distance, "m must be in (0, 100]");
+  if (absl::Status status = ValidateTerminationDistance(termination_distance); !status.ok()) {
+    return absl::InvalidArgumentError(absl::StrCat("--", status.message()));
   }
   if (termination_bodies != "all" && termination_bodies != "no_feet") {
     return bad("termination_bodies", termination_bodies.substr(0, 64), "is not all or no_feet");
   }
   if (curriculum_start != 0 || curriculum_end != 0) {
-    auto in_range = [](double d) { return std::isfinite(d) && d > 0 && d <= 100; };
-    if (!in_range(curriculum_start) || !in_range(curriculum_end)) {
+    if (!ValidateTerminationDistance(curriculum_start).ok() || !ValidateTerminationDistance(curriculum_end).ok()) {
       return absl::InvalidArgumentError(absl::StrCat("--termination_curriculum: ", curriculum_start, ":",
-                                                     curriculum_end, " distances must be in (0, 100] m"));
+                                                     curriculum_end, " distances must be in (0, ",
+                                                     kMaxTerminationDistance, "] m"));
     }
     if (curriculum_start < curriculum_end) {
       return absl::InvalidArgumentError(absl::StrCat("--termination_curriculum: start ", curriculum_start,

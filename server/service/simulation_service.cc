@@ -44,11 +44,9 @@ absl::StatusOr<TerminationMode> ToTermination(v1::TerminationMode mode, v1::Term
 }
 
 absl::StatusOr<double> ToTerminationDistance(float distance, TerminationMode mode) {
-  if (!std::isfinite(distance) || distance < 0 || distance > 100) {
-    return absl::InvalidArgumentError(absl::StrCat("termination_distance: ", distance, " outside [0, 100] m"));
-  }
-  if (distance > 0) return distance;
-  return mode == TerminationMode::kEvaluation ? 0.5 : 0.25;
+  if (distance == 0) return mode == TerminationMode::kEvaluation ? 0.5 : 0.25;  // the mode's default
+  if (absl::Status status = ValidateTerminationDistance(distance); !status.ok()) return status;
+  return distance;
 }
 
 absl::StatusOr<ActionMapping> ToActionMapping(v1::ActionMode mode, float residual_scale) {
