@@ -22,8 +22,9 @@ const Vec3 kTemplatePelvisYup(-0.0018, -0.2233, 0.0282);
 
 }  // namespace
 
-absl::StatusOr<MotionClip> ImportAmassNpz(const std::string& path, const HumanoidSpec& spec) {
-  auto archive = ReadNpz(path);
+absl::StatusOr<MotionClip> ImportAmassNpz(const std::string& path, const HumanoidSpec& spec,
+                                          const ResourceLimits& limits) {
+  auto archive = ReadNpz(path, limits);
   if (!archive.ok()) return archive.status();
   auto member = [&](const char* name) -> const NpyArray* {
     auto it = archive->find(name);
@@ -53,8 +54,10 @@ absl::StatusOr<MotionClip> ImportAmassNpz(const std::string& path, const Humanoi
     return absl::InvalidArgumentError(absl::StrCat(path, ": field 'trans' must be ", frames, " x 3"));
   }
   if (frames < 2) return absl::InvalidArgumentError(absl::StrCat(path, ": field 'poses' has ", frames, " frames, need >= 2"));
-  if (rate->size() != 1 || !(rate->data[0] > 0 && rate->data[0] <= 10000)) {
-    return absl::InvalidArgumentError(absl::StrCat(path, ": field 'mocap_framerate' must be one number in (0, 10000]"));
+  if (rate->size() != 1) return absl::InvalidArgumentError(absl::StrCat(path, ": field 'mocap_framerate' must be one number"));
+  if (auto status = ValidateClipTiming(rate->data[0], frames, absl::StrCat(path, ": field 'mocap_framerate'"), limits);
+      !status.ok()) {
+    return status;
   }
   for (int64_t i = 0; i < poses->size(); ++i) {
     if (!std::isfinite(poses->data[i])) {

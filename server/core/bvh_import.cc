@@ -101,10 +101,16 @@ int LeadingCalibrationFrames(const BvhClip& bvh) {
   return dropped;
 }
 
-absl::StatusOr<MotionClip> ImportCmuBvh(const std::string& path, const HumanoidSpec& spec) {
+absl::StatusOr<MotionClip> ImportCmuBvh(const std::string& path, const HumanoidSpec& spec,
+                                        const ResourceLimits& limits) {
   auto bvh = ReadBvhFile(path);
   if (!bvh.ok()) return bvh.status();
   if (!(bvh->frame_time > 0)) return absl::InvalidArgumentError(absl::StrCat(path, ": Frame Time must be > 0"));
+  if (auto status = ValidateClipTiming(1.0 / bvh->frame_time, bvh->num_frames,
+                                       absl::StrCat(path, ": Frame Time ", bvh->frame_time), limits);
+      !status.ok()) {
+    return status;
+  }
   if (const int calibration = LeadingCalibrationFrames(*bvh); calibration > 0) {
     bvh->num_frames -= calibration;
     bvh->root_translation.erase(bvh->root_translation.begin(), bvh->root_translation.begin() + calibration);

@@ -7,6 +7,7 @@
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
 #include "server/core/atomic_file.h"
+#include "server/core/clip_name.h"
 
 namespace modskill {
 namespace {
@@ -71,7 +72,7 @@ std::string EncodeClip(const MotionClip& clip) {
   return out;
 }
 
-absl::StatusOr<MotionClip> DecodeClip(absl::string_view bytes, absl::string_view what) {
+absl::StatusOr<MotionClip> DecodeClip(absl::string_view bytes, absl::string_view what, const ResourceLimits& limits) {
   auto corrupt = [&](absl::string_view why) {
     return absl::InvalidArgumentError(absl::StrCat(what, ": not a valid clip file: ", why));
   };
@@ -94,6 +95,12 @@ absl::StatusOr<MotionClip> DecodeClip(absl::string_view bytes, absl::string_view
       !cursor.GetString(&clip.source)) {
     return corrupt("strings truncated");
   }
+  if (auto status = ValidateClipName(clip.name, limits.max_name_length); !status.ok()) {
+    return absl::InvalidArgumentError(absl::StrCat(what, ": ", status.message()));
+  }
+  if (auto status = ValidateClipTiming(clip.fps, frames, absl::StrCat(what, ": fps"), limits); !status.ok()) {
+    return status;
+  }
   const size_t floats_needed = static_cast<size_t>(frames) * (3 + 4 * static_cast<size_t>(bodies));
   if (cursor.remaining() != floats_needed * sizeof(float)) {
     return corrupt(absl::StrCat("payload is ", cursor.remaining(), " bytes, ", frames, " frames x ", bodies,
@@ -114,7 +121,7 @@ absl::StatusOr<MotionClip> DecodeClip(absl::string_view bytes, absl::string_view
     // float32 storage loses a little norm; renormalize so validation sees unit quaternions.
     if (q.norm() > 0.5) q.normalize();
   }
-  if (auto status = ValidateClip(clip); !status.ok()) {
+  if (auto status = ValidateClip(clip, limits); !status.ok()) {
     return absl::InvalidArgumentError(absl::StrCat(what, ": ", status.message()));
   }
   return clip;
@@ -125,10 +132,11 @@ absl::Status WriteClipFile(const std::string& path, const MotionClip& clip) {
   return WriteFileAtomically(path, EncodeClip(clip));
 }
 
-absl::StatusOr<MotionClip> ReadClipFile(const std::string& path, const HumanoidSpec& spec) {
+absl::StatusOr<MotionClip> ReadClipFile(const std::string& path, const HumanoidSpec& spec,
+                                        const ResourceLimits& limits) {
   auto bytes = ReadFileToString(path, kMaxClipBytes);
   if (!bytes.ok()) return bytes.status();
-  auto clip = DecodeClip(*bytes, path);
+  auto clip = DecodeClip(*bytes, path, limits);
   if (!clip.ok()) return clip.status();
   if (auto status = ComputeClipKinematics(spec, &*clip); !status.ok()) {
     return absl::InvalidArgumentError(absl::StrCat(path, ": ", status.message()));

@@ -13,18 +13,23 @@
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
 #include "server/core/motion_clip.h"
+#include "server/core/resource_limits.h"
 
 namespace modskill {
 
 inline constexpr absl::string_view kClipFileExtension = ".msclip";
 
 std::string EncodeClip(const MotionClip& clip);
-// `what` names the source in error messages. Derived fields are left empty.
-absl::StatusOr<MotionClip> DecodeClip(absl::string_view bytes, absl::string_view what);
+// `what` names the source in error messages. Derived fields are left empty. The stored name must
+// pass ValidateClipName and the header's fps and frame count ValidateClipTiming, before the
+// frames are allocated.
+absl::StatusOr<MotionClip> DecodeClip(absl::string_view bytes, absl::string_view what,
+                                      const ResourceLimits& limits = DefaultResourceLimits());
 
 absl::Status WriteClipFile(const std::string& path, const MotionClip& clip);
 // Reads and computes kinematics for `spec`.
-absl::StatusOr<MotionClip> ReadClipFile(const std::string& path, const HumanoidSpec& spec);
+absl::StatusOr<MotionClip> ReadClipFile(const std::string& path, const HumanoidSpec& spec,
+                                        const ResourceLimits& limits = DefaultResourceLimits());
 
 }  // namespace modskill
 

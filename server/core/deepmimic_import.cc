@@ -82,7 +82,7 @@ RetargetMap DeepMimicRetargetMap() {
 }  // namespace
 
 absl::StatusOr<MotionClip> ImportDeepMimicText(absl::string_view text, absl::string_view what,
-                                               const HumanoidSpec& spec) {
+                                               const HumanoidSpec& spec, const ResourceLimits& limits) {
   nlohmann::json root = nlohmann::json::parse(text.begin(), text.end(), nullptr, /*allow_exceptions=*/false);
   if (root.is_discarded()) return absl::InvalidArgumentError(absl::StrCat(what, ": not valid JSON"));
   if (!root.is_object() || !root.contains("Frames") || !root["Frames"].is_array()) {
@@ -90,6 +90,11 @@ absl::StatusOr<MotionClip> ImportDeepMimicText(absl::string_view text, absl::str
   }
   const auto& frames = root["Frames"];
   if (frames.size() < 2) return absl::InvalidArgumentError(absl::StrCat(what, ": field 'Frames' needs at least 2 frames"));
+  if (frames.size() > static_cast<size_t>(limits.max_clip_frames)) {
+    return absl::InvalidArgumentError(absl::StrCat(what, ": field 'Frames' has ", frames.size(),
+                                                   " frames, more than the limit of ", limits.max_clip_frames,
+                                                   " (max_clip_frames)"));
+  }
   RetargetSource source;
   source.what = std::string(what);
   source.num_frames = static_cast<int>(frames.size());
@@ -115,6 +120,11 @@ absl::StatusOr<MotionClip> ImportDeepMimicText(absl::string_view text, absl::str
     if (f == 0) {
       if (!(v[0] > 0)) return absl::InvalidArgumentError(absl::StrCat(what, ": Frames[0][0] (dt) must be > 0"));
       source.fps = 1.0 / v[0];
+      if (auto status = ValidateClipTiming(source.fps, source.num_frames,
+                                           absl::StrCat(what, ": Frames[0][0] (dt) ", v[0]), limits);
+          !status.ok()) {
+        return status;
+      }
     }
     source.root_pos[f] = Vec3(v[1], v[2], v[3]);
     for (int j = 0; j < kNumJoints; ++j) {
@@ -133,10 +143,11 @@ absl::StatusOr<MotionClip> ImportDeepMimicText(absl::string_view text, absl::str
   return RetargetToHumanoid(source, DeepMimicRetargetMap(), spec);
 }
 
-absl::StatusOr<MotionClip> ImportDeepMimic(const std::string& path, const HumanoidSpec& spec) {
+absl::StatusOr<MotionClip> ImportDeepMimic(const std::string& path, const HumanoidSpec& spec,
+                                           const ResourceLimits& limits) {
   auto text = ReadFileToString(path, size_t{256} << 20);
   if (!text.ok()) return text.status();
-  return ImportDeepMimicText(*text, path, spec);
+  return ImportDeepMimicText(*text, path, spec, limits);
 }
 
 }  // namespace modskill

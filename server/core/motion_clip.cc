@@ -16,11 +16,30 @@ bool Finite(const Vec3& v) { return std::isfinite(v.x()) && std::isfinite(v.y())
 
 }  // namespace
 
-absl::Status ValidateClip(const MotionClip& clip) {
+absl::Status ValidateClipTiming(double fps, int64_t num_frames, absl::string_view field, const ResourceLimits& limits) {
+  if (!(std::isfinite(fps) && fps > 0 && fps <= limits.max_fps)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat(field, ": frame rate ", fps, " fps outside (0, ", limits.max_fps, "] (max_fps)"));
+  }
+  if (num_frames > limits.max_clip_frames) {
+    return absl::InvalidArgumentError(absl::StrCat(field, ": ", num_frames, " frames, more than the limit of ",
+                                                   limits.max_clip_frames, " (max_clip_frames)"));
+  }
+  // In double: a rate near zero gives a duration no integer holds.
+  const double seconds = num_frames > 1 ? (num_frames - 1) / fps : 0.0;
+  if (!(seconds <= limits.max_clip_seconds)) {
+    return absl::InvalidArgumentError(absl::StrCat(field, ": ", num_frames, " frames at ", fps, " fps last ", seconds,
+                                                   " s, more than the limit of ", limits.max_clip_seconds,
+                                                   " s (max_clip_seconds)"));
+  }
+  return absl::OkStatus();
+}
+
+absl::Status ValidateClip(const MotionClip& clip, const ResourceLimits& limits) {
   const std::string where = absl::StrCat("clip '", clip.name, "'");
   if (clip.num_frames < 2) return absl::InvalidArgumentError(absl::StrCat(where, ": num_frames ", clip.num_frames, " < 2"));
-  if (!(clip.fps > 0 && clip.fps <= 10000)) {
-    return absl::InvalidArgumentError(absl::StrCat(where, ": fps ", clip.fps, " outside (0, 10000]"));
+  if (auto status = ValidateClipTiming(clip.fps, clip.num_frames, absl::StrCat(where, ": fps"), limits); !status.ok()) {
+    return status;
   }
   if (clip.num_bodies < 1) return absl::InvalidArgumentError(absl::StrCat(where, ": num_bodies ", clip.num_bodies));
   if (clip.root_pos.size() != static_cast<size_t>(clip.num_frames)) {
@@ -34,6 +53,12 @@ absl::Status ValidateClip(const MotionClip& clip) {
   for (int f = 0; f < clip.num_frames; ++f) {
     if (!Finite(clip.root_pos[f])) {
       return absl::InvalidArgumentError(absl::StrCat(where, ": root_pos of frame ", f, " is not finite"));
+    }
+    if (clip.root_pos[f].cwiseAbs().maxCoeff() > limits.max_position) {
+      return absl::InvalidArgumentError(absl::StrCat(where, ": root_pos of frame ", f, " (", clip.root_pos[f].x(), ", ",
+                                                     clip.root_pos[f].y(), ", ", clip.root_pos[f].z(),
+                                                     ") is more than ", limits.max_position,
+                                                     " m from the origin (max_position)"));
     }
     for (int b = 0; b < clip.num_bodies; ++b) {
       const Quat& q = clip.local(f, b);
@@ -90,7 +115,14 @@ absl::Status ComputeClipKinematics(const HumanoidSpec& spec, MotionClip* clip) {
   return absl::OkStatus();
 }
 
-MotionClip ResampleClip(const MotionClip& clip, double fps) {
+absl::StatusOr<MotionClip> ResampleClip(const MotionClip& clip, double fps, const ResourceLimits& limits) {
+  if (auto status = ValidateClip(clip, limits); !status.ok()) return status;
+  // The output's size from the duration: the rate is checked first, so that the count, bounded by
+  // max_clip_seconds x max_fps, is finite before it is cast and checked against max_clip_frames.
+  const std::string field = absl::StrCat("clip '", clip.name, "' resampled to ", fps, " fps");
+  if (auto status = ValidateClipTiming(fps, 2, field, limits); !status.ok()) return status;
+  const double frames = std::floor(clip.duration() * fps + 1e-6) + 1;
+  if (auto status = ValidateClipTiming(fps, static_cast<int64_t>(frames), field, limits); !status.ok()) return status;
   MotionClip out;
   out.name = clip.name;
   out.label = clip.label;
@@ -98,7 +130,7 @@ MotionClip ResampleClip(const MotionClip& clip, double fps) {
   out.source = clip.source;
   out.num_bodies = clip.num_bodies;
   out.fps = fps;
-  out.num_frames = std::max(2, static_cast<int>(std::floor(clip.duration() * fps + 1e-6)) + 1);
+  out.num_frames = std::max(2, static_cast<int>(frames));
   out.root_pos.resize(out.num_frames);
   out.local_rot.resize(static_cast<size_t>(out.num_frames) * out.num_bodies);
   for (int f = 0; f < out.num_frames; ++f) {

@@ -6,7 +6,10 @@
 #include <vector>
 
 #include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "absl/strings/string_view.h"
 #include "server/core/humanoid_spec.h"
+#include "server/core/resource_limits.h"
 #include "server/core/rotation_math.h"
 
 namespace modskill {
@@ -40,15 +43,24 @@ struct MotionClip {
   Quat& local(int frame, int body) { return local_rot[frame * num_bodies + body]; }
 };
 
-// Checks sizes, finite numbers and unit quaternions; the message names the clip, field and frame.
-absl::Status ValidateClip(const MotionClip& clip);
+// Checks sizes, the frame rate and duration against `limits`, finite numbers, root positions
+// within limits.max_position and unit quaternions; the message names the clip, field and frame.
+absl::Status ValidateClip(const MotionClip& clip, const ResourceLimits& limits = DefaultResourceLimits());
+
+// The one check of a declared rate before anything is sized from it: fps finite in
+// (0, limits.max_fps], num_frames <= limits.max_clip_frames and (num_frames - 1) / fps <=
+// limits.max_clip_seconds. `field` names where the rate came from, e.g. "Frame Time 0.5".
+absl::Status ValidateClipTiming(double fps, int64_t num_frames, absl::string_view field,
+                                const ResourceLimits& limits = DefaultResourceLimits());
 
 // Forward kinematics with the spec's offsets, finite-difference velocities and hinge angles
 // (MuJoCo's x-y-z hinge order). Needs root_pos and local_rot.
 absl::Status ComputeClipKinematics(const HumanoidSpec& spec, MotionClip* clip);
 
-// Resamples root_pos/local_rot to `fps` (linear / slerp); derived fields are cleared.
-MotionClip ResampleClip(const MotionClip& clip, double fps);
+// Resamples root_pos/local_rot to `fps` (linear / slerp); derived fields are cleared. Fails,
+// before allocating, when the resampled clip would break `limits`.
+absl::StatusOr<MotionClip> ResampleClip(const MotionClip& clip, double fps,
+                                        const ResourceLimits& limits = DefaultResourceLimits());
 
 // Lowest point of the collision geometry in one frame (needs body_pos/body_rot).
 double LowestGeomPoint(const HumanoidSpec& spec, const MotionClip& clip, int frame);

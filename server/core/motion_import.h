@@ -10,34 +10,44 @@
 #include "server/core/bvh_parser.h"
 #include "server/core/humanoid_spec.h"
 #include "server/core/motion_clip.h"
+#include "server/core/resource_limits.h"
 
 namespace modskill {
 
 struct ImportOptions {
   double target_fps = 30.0;     // the control rate
   bool place_on_ground = true;  // lowest geometry over the clip touches z = 0
-  std::string name;             // default: derived from the file name
+  std::string name;             // default: derived from the file name; checked by ValidateClipName
   std::string label;
   std::string humanml3d_id;
+  ResourceLimits limits = DefaultResourceLimits();  // frames, duration, npz sizes, name length
 };
 
 // Picks the importer from the extension (and, for .txt, the content), resamples, grounds and
-// computes kinematics. Errors name the file and the field.
+// computes kinematics. Errors name the file and the field. The clip's name (options.name, the
+// name stored in an .msclip, or the one derived from the file name) must pass ValidateClipName.
 absl::StatusOr<MotionClip> ImportMotionFile(const std::string& path, const HumanoidSpec& spec,
                                             const ImportOptions& options = {});
 
 // The raw importers: clip at the file's own rate, on the humanoid, kinematics not yet computed.
-absl::StatusOr<MotionClip> ImportAmassNpz(const std::string& path, const HumanoidSpec& spec);
+// Each checks the file's declared rate and frame count with ValidateClipTiming before sizing
+// anything from them.
+absl::StatusOr<MotionClip> ImportAmassNpz(const std::string& path, const HumanoidSpec& spec,
+                                          const ResourceLimits& limits = DefaultResourceLimits());
 // Drops the leading calibration frame CMU takes start with (see LeadingCalibrationFrames).
-absl::StatusOr<MotionClip> ImportCmuBvh(const std::string& path, const HumanoidSpec& spec);
+absl::StatusOr<MotionClip> ImportCmuBvh(const std::string& path, const HumanoidSpec& spec,
+                                        const ResourceLimits& limits = DefaultResourceLimits());
 // How many leading frames of `bvh` are a calibration pose: each differs from the next by far more
 // than the take then moves per frame.
 int LeadingCalibrationFrames(const BvhClip& bvh);
-absl::StatusOr<MotionClip> ImportDeepMimic(const std::string& path, const HumanoidSpec& spec);
+absl::StatusOr<MotionClip> ImportDeepMimic(const std::string& path, const HumanoidSpec& spec,
+                                           const ResourceLimits& limits = DefaultResourceLimits());
 absl::StatusOr<MotionClip> ImportDeepMimicText(absl::string_view text, absl::string_view what,
-                                               const HumanoidSpec& spec);
+                                               const HumanoidSpec& spec,
+                                               const ResourceLimits& limits = DefaultResourceLimits());
 
-// "humanoid3d_walk.txt" -> "deepmimic_walk", "02_01.bvh" -> "cmu_02_01", "x.npz" -> "x".
+// "humanoid3d_walk.txt" -> "deepmimic_walk", "02_01.bvh" -> "cmu_02_01", "x.npz" -> "x"; characters
+// a clip name may not hold become '_' (SanitizeClipName).
 std::string DefaultClipName(const std::string& path);
 
 }  // namespace modskill

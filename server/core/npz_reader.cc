@@ -97,7 +97,7 @@ std::string PythonShape(const std::vector<int64_t>& shape) {
 // ---------------------------------------------------------------------------------------------
 // Reading the file.
 
-absl::StatusOr<std::string> ReadWholeFile(const std::string& path) {
+absl::StatusOr<std::string> ReadWholeFile(const std::string& path, int64_t max_bytes) {
   std::error_code error;
   const std::filesystem::file_status status = std::filesystem::status(path, error);
   if (!std::filesystem::exists(status)) {
@@ -118,6 +118,10 @@ absl::StatusOr<std::string> ReadWholeFile(const std::string& path) {
   file.seekg(0, std::ios::beg);
   if (size < 0 || !file) {
     return absl::UnavailableError(absl::StrCat(path, ": cannot determine the file size"));
+  }
+  if (size > max_bytes) {
+    return absl::InvalidArgumentError(absl::StrCat(path, ": ", size, " bytes, more than the limit of ", max_bytes,
+                                                   " (max_decompressed_bytes)"));
   }
   std::string contents(static_cast<size_t>(size), '\0');
   file.read(contents.data(), size);
@@ -766,7 +770,7 @@ absl::StatusOr<std::string> DecodeFirstString(const Dtype& dtype, absl::string_v
   return utf8;
 }
 
-absl::StatusOr<NpyArray> ParseNpyUnprefixed(absl::string_view bytes) {
+absl::StatusOr<NpyArray> ParseNpyUnprefixed(absl::string_view bytes, const ResourceLimits& limits) {
   if (!absl::StartsWith(bytes, kNpyMagic)) {
     return absl::InvalidArgumentError(absl::StrCat("not a .npy array: bad magic \"",
                                                    Printable(bytes.substr(0, 6)),
@@ -825,6 +829,13 @@ absl::StatusOr<NpyArray> ParseNpyUnprefixed(absl::string_view bytes) {
                                                    PythonShape(header->shape), " of ",
                                                    header->descr, " needs ", needed));
   }
+  // Numbers are held as doubles: a u1 array takes eight times its bytes in the file.
+  const bool numeric = dtype->kind != 'U' && dtype->kind != 'S';
+  if (numeric && count > limits.max_npz_member_bytes / static_cast<int64_t>(sizeof(double))) {
+    return absl::InvalidArgumentError(absl::StrCat("shape ", PythonShape(header->shape), " holds ", count,
+                                                   " numbers, more than the ", limits.max_npz_member_bytes,
+                                                   " bytes as doubles allowed per array (max_npz_member_bytes)"));
+  }
 
   NpyArray array;
   array.shape = header->shape;
@@ -850,28 +861,47 @@ absl::StatusOr<NpyArray> ParseNpyUnprefixed(absl::string_view bytes) {
   return array;
 }
 
-absl::StatusOr<absl::flat_hash_map<std::string, NpyArray>> ReadNpzUnguarded(
-    const std::string& path) {
-  absl::StatusOr<std::string> archive = ReadWholeFile(path);
-  if (!archive.ok()) return archive.status();
-  absl::StatusOr<CentralDirectory> directory = LocateCentralDirectory(*archive);
-  if (!directory.ok()) return WithPrefix(directory.status(), path);
-  absl::StatusOr<std::vector<ZipEntry>> entries = ReadCentralDirectory(*archive, *directory);
-  if (!entries.ok()) return WithPrefix(entries.status(), path);
+absl::StatusOr<absl::flat_hash_map<std::string, NpyArray>> ParseNpzUnguarded(absl::string_view archive,
+                                                                             absl::string_view what,
+                                                                             const ResourceLimits& limits) {
+  absl::StatusOr<CentralDirectory> directory = LocateCentralDirectory(archive);
+  if (!directory.ok()) return WithPrefix(directory.status(), what);
+  absl::StatusOr<std::vector<ZipEntry>> entries = ReadCentralDirectory(archive, *directory);
+  if (!entries.ok()) return WithPrefix(entries.status(), what);
+
+  // The sizes the archive records are checked before anything is inflated; Inflate then refuses
+  // to produce more than the recorded size, so a bomb stops at the bound.
+  uint64_t total = 0;
+  for (const ZipEntry& entry : *entries) {
+    // Data that cannot lie in the file is reported by ExtractMember, before it inflates anything.
+    if (entry.compressed_size > archive.size()) continue;
+    const std::string member = absl::StrCat(what, ": member '", entry.name, "'");
+    if (entry.uncompressed_size > static_cast<uint64_t>(limits.max_npz_member_bytes)) {
+      return absl::InvalidArgumentError(absl::StrCat(member, ": inflates to ", entry.uncompressed_size,
+                                                     " bytes, more than the limit of ", limits.max_npz_member_bytes,
+                                                     " per member (max_npz_member_bytes)"));
+    }
+    total += entry.uncompressed_size;
+    if (total > static_cast<uint64_t>(limits.max_decompressed_bytes)) {
+      return absl::InvalidArgumentError(absl::StrCat(what, ": members inflate to more than the limit of ",
+                                                     limits.max_decompressed_bytes,
+                                                     " bytes (max_decompressed_bytes)"));
+    }
+  }
 
   absl::flat_hash_map<std::string, NpyArray> arrays;
   for (const ZipEntry& entry : *entries) {
     if (absl::EndsWith(entry.name, "/")) continue;  // A directory entry holds no data.
-    const std::string what = absl::StrCat(path, ": member '", entry.name, "'");
-    absl::StatusOr<std::string> contents = ExtractMember(*archive, entry);
-    if (!contents.ok()) return WithPrefix(contents.status(), what);
-    absl::StatusOr<NpyArray> array = ParseNpy(*contents, what);
+    const std::string member = absl::StrCat(what, ": member '", entry.name, "'");
+    absl::StatusOr<std::string> contents = ExtractMember(archive, entry);
+    if (!contents.ok()) return WithPrefix(contents.status(), member);
+    absl::StatusOr<NpyArray> array = ParseNpy(*contents, member, limits);
     if (!array.ok()) return array.status();
     std::string key = entry.name;
     if (absl::EndsWith(key, ".npy")) key.resize(key.size() - 4);
     if (!arrays.emplace(key, *std::move(array)).second) {
       return absl::InvalidArgumentError(
-          absl::StrCat(what, ": the archive holds '", key, "' more than once"));
+          absl::StrCat(member, ": the archive holds '", key, "' more than once"));
     }
   }
   return arrays;
@@ -885,20 +915,28 @@ int64_t NpyArray::size() const {
   return count;
 }
 
-absl::StatusOr<NpyArray> ParseNpy(absl::string_view bytes, absl::string_view what) {
-  absl::StatusOr<NpyArray> array = ParseNpyUnprefixed(bytes);
+absl::StatusOr<NpyArray> ParseNpy(absl::string_view bytes, absl::string_view what, const ResourceLimits& limits) {
+  absl::StatusOr<NpyArray> array = ParseNpyUnprefixed(bytes, limits);
   if (!array.ok()) return WithPrefix(array.status(), what);
   return array;
 }
 
-absl::StatusOr<absl::flat_hash_map<std::string, NpyArray>> ReadNpz(const std::string& path) {
-  // Sizes are checked against the file before anything is allocated, so this only guards
-  // against a genuinely huge archive.
+absl::StatusOr<absl::flat_hash_map<std::string, NpyArray>> ParseNpz(absl::string_view archive, absl::string_view what,
+                                                                    const ResourceLimits& limits) {
+  // Sizes are checked against the limits before anything is allocated, so this only guards
+  // against a machine already short of memory.
   try {
-    return ReadNpzUnguarded(path);
+    return ParseNpzUnguarded(archive, what, limits);
   } catch (const std::bad_alloc&) {
-    return absl::ResourceExhaustedError(absl::StrCat(path, ": out of memory while reading"));
+    return absl::ResourceExhaustedError(absl::StrCat(what, ": out of memory while reading"));
   }
+}
+
+absl::StatusOr<absl::flat_hash_map<std::string, NpyArray>> ReadNpz(const std::string& path,
+                                                                   const ResourceLimits& limits) {
+  absl::StatusOr<std::string> archive = ReadWholeFile(path, limits.max_decompressed_bytes);
+  if (!archive.ok()) return archive.status();
+  return ParseNpz(*archive, path, limits);
 }
 
 }  // namespace modskill

@@ -11,6 +11,7 @@
 #include "absl/container/flat_hash_map.h"
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
+#include "server/core/resource_limits.h"
 
 namespace modskill {
 
@@ -35,11 +36,21 @@ struct NpyArray {
 // Reads every member of the archive at `path`, keyed by member name without the ".npy"
 // suffix. Checks the CRC-32 of each member. Every failure, including a missing file, is a
 // non-OK status whose message names the path and, where it applies, the member.
-absl::StatusOr<absl::flat_hash_map<std::string, NpyArray>> ReadNpz(const std::string& path);
+// Sizes are bounded by `limits` before anything is inflated or allocated: the sizes the zip
+// records for each member (max_npz_member_bytes) and for all of them together
+// (max_decompressed_bytes), and each array as doubles (max_npz_member_bytes); the file itself may
+// be no larger than max_decompressed_bytes. Breaking a bound is InvalidArgument.
+absl::StatusOr<absl::flat_hash_map<std::string, NpyArray>> ReadNpz(
+    const std::string& path, const ResourceLimits& limits = DefaultResourceLimits());
+
+// The same for the archive's bytes in memory; `what` names it in messages.
+absl::StatusOr<absl::flat_hash_map<std::string, NpyArray>> ParseNpz(
+    absl::string_view archive, absl::string_view what, const ResourceLimits& limits = DefaultResourceLimits());
 
 // Parses the bytes of one .npy file (format versions 1.0, 2.0 and 3.0). `what` prefixes
 // every error message, e.g. "walk.npz: member 'poses.npy'".
-absl::StatusOr<NpyArray> ParseNpy(absl::string_view bytes, absl::string_view what);
+absl::StatusOr<NpyArray> ParseNpy(absl::string_view bytes, absl::string_view what,
+                                  const ResourceLimits& limits = DefaultResourceLimits());
 
 }  // namespace modskill
 

@@ -4,6 +4,8 @@
 
 #include "absl/strings/str_cat.h"
 #include "server/core/clip_file.h"
+#include "server/core/clip_name.h"
+#include "server/core/confined_path.h"
 #include "server/service/discriminator_scorer.h"
 #include "server/service/server_log.h"
 
@@ -129,12 +131,22 @@ void GenerationWorker::RunRound(SimulationSession& session, const GenerationRequ
       session.CommitRound(parent.name, std::move(accepted), counters);
   if (save_dir_.empty()) return;
   for (const auto& clip : added) {
-    const std::string directory = absl::StrCat(save_dir_, "/", session.id);
-    const std::string path = absl::StrCat(directory, "/", clip->name, kClipFileExtension);
+    // Names come from clients (a parent uploaded with AddMotions) and session ids from the
+    // server; both are checked and the path confined to --save_generated all the same.
+    auto directory = ConfinedPath(save_dir_, session.id);
+    absl::StatusOr<std::string> path = directory.status();
+    if (directory.ok()) {
+      absl::Status name = ValidateClipName(clip->name, kMaxFileNameLength - static_cast<int>(kClipFileExtension.size()));
+      path = name.ok() ? ConfinedPath(*directory, absl::StrCat(clip->name, kClipFileExtension)) : name;
+    }
+    if (!path.ok()) {
+      LogLine("session %s: not saving a generated clip: %s", session.id, path.status().ToString());
+      continue;
+    }
     std::error_code error;
-    std::filesystem::create_directories(directory, error);
-    if (absl::Status status = WriteClipFile(path, *clip); !status.ok()) {
-      LogLine("session %s: could not save '%s': %s", session.id, path, status.ToString());
+    std::filesystem::create_directories(*directory, error);
+    if (absl::Status status = WriteClipFile(*path, *clip); !status.ok()) {
+      LogLine("session %s: could not save '%s': %s", session.id, *path, status.ToString());
     }
   }
 }

@@ -16,6 +16,7 @@
 #include "absl/strings/str_split.h"
 #include "absl/strings/strip.h"
 #include "server/core/clip_file.h"
+#include "server/core/confined_path.h"
 #include "server/core/humanoid_spec.h"
 #include "server/core/motion_import.h"
 
@@ -111,7 +112,14 @@ int Import(const std::vector<std::string>& inputs, const HumanoidSpec& spec) {
       ++failures;
       continue;
     }
-    const std::string out_path = out_dir + "/" + clip->name + std::string(kClipFileExtension);
+    // The importer checked the name; the path is confined to --out all the same.
+    auto confined = ConfinedPath(out_dir, clip->name + std::string(kClipFileExtension));
+    if (!confined.ok()) {
+      std::fprintf(stderr, "error: %s: %s\n", input.c_str(), std::string(confined.status().message()).c_str());
+      ++failures;
+      continue;
+    }
+    const std::string& out_path = *confined;
     if (auto status = WriteClipFile(out_path, *clip); !status.ok()) {
       std::fprintf(stderr, "error: %s\n", std::string(status.message()).c_str());
       ++failures;

@@ -1,0 +1,24 @@
+// Paths built from names a client or a file chose (clip names) must stay inside the directory
+// the operator configured: the joined path is resolved (symbolic links, "..") and checked to lie
+// under the resolved directory, so no name can write elsewhere even if a check upstream missed it.
+#ifndef MODSKILL_SERVER_CORE_CONFINED_PATH_H_
+#define MODSKILL_SERVER_CORE_CONFINED_PATH_H_
+
+#include <string>
+
+#include "absl/status/statusor.h"
+#include "absl/strings/string_view.h"
+
+namespace modskill {
+
+// Longest file name common file systems take (NAME_MAX).
+inline constexpr int kMaxFileNameLength = 255;
+
+// `directory`/`file_name`, resolved; InvalidArgument when `file_name` is not one plain file name
+// or the result would lie outside `directory` (which need not exist yet), or when it names a
+// symbolic link.
+absl::StatusOr<std::string> ConfinedPath(const std::string& directory, absl::string_view file_name);
+
+}  // namespace modskill
+
+#endif  // MODSKILL_SERVER_CORE_CONFINED_PATH_H_
