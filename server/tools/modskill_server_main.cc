@@ -3,6 +3,7 @@
 #include <pthread.h>
 #include <signal.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <string>
 
@@ -14,6 +15,7 @@
 #include "server/core/adaptive_sampler.h"
 #include "server/core/atomic_file.h"
 #include "server/core/data_paths.h"
+#include "server/core/resource_limits.h"
 #include "server/core/session_motion_set.h"
 #include "server/service/policy_checkpoint.h"
 #include "server/service/server_log.h"
@@ -48,6 +50,11 @@ ABSL_FLAG(std::string, generator, "",
           "host:port of an external MotionGenerator service (e.g. client/python/examples/"
           "motion_generator_service.py); empty: the built-in generator only");
 ABSL_FLAG(int, generator_timeout_ms, 10000, "deadline of one external generator call");
+ABSL_FLAG(int, max_clip_frames, modskill::ResourceLimits{}.max_clip_frames,
+          "most frames one clip may hold, at its own rate or resampled (uploads, library, generated)");
+ABSL_FLAG(int64_t, max_decompressed_bytes, modskill::ResourceLimits{}.max_decompressed_bytes,
+          "most bytes an uploaded .npz may inflate to, over all its members");
+ABSL_FLAG(int, max_name_length, modskill::ResourceLimits{}.max_name_length, "most characters in a clip name");
 ABSL_FLAG(std::string, save_generated, "",
           "directory: also write every generated clip that joins a session as <session>/<name>.msclip");
 
@@ -59,6 +66,15 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "error: %s\n", message.c_str());
     return 2;
   };
+  ResourceLimits limits;
+  limits.max_clip_frames = absl::GetFlag(FLAGS_max_clip_frames);
+  limits.max_decompressed_bytes = absl::GetFlag(FLAGS_max_decompressed_bytes);
+  limits.max_npz_member_bytes = std::min(limits.max_npz_member_bytes, limits.max_decompressed_bytes);
+  limits.max_name_length = absl::GetFlag(FLAGS_max_name_length);
+  if (limits.max_clip_frames < 2) return fail("--max_clip_frames must be >= 2");
+  if (limits.max_decompressed_bytes < 1) return fail("--max_decompressed_bytes must be >= 1");
+  if (limits.max_name_length < 1) return fail("--max_name_length must be >= 1");
+  SetDefaultResourceLimits(limits);  // before the library loads and any thread starts
   ServerOptions options;
   options.bind = absl::GetFlag(FLAGS_bind);
   options.port = absl::GetFlag(FLAGS_port);
