@@ -1,0 +1,15 @@
+// libFuzzer target: DeepMimic humanoid3d JSON (deepmimic_import.cc), through ImportMotionFile.
+#include <cstddef>
+#include <cstdint>
+
+#include "fuzz/fuzz_import.h"
+
+extern "C" int LLVMFuzzerInitialize(int*, char***) {
+  modskill::fuzz::InitializeImportFuzzer();
+  return 0;
+}
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  modskill::fuzz::FuzzImport(data, size, ".txt");
+  return 0;
+}
