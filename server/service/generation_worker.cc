@@ -133,18 +133,19 @@ void GenerationWorker::RunRound(SimulationSession& session, const GenerationRequ
   for (const auto& clip : added) {
     // Names come from clients (a parent uploaded with AddMotions) and session ids from the
     // server; both are checked and the path confined to --save_generated all the same.
-    auto directory = ConfinedPath(save_dir_, session.id);
-    absl::StatusOr<std::string> path = directory.status();
-    if (directory.ok()) {
-      absl::Status name = ValidateClipName(clip->name, kMaxFileNameLength - static_cast<int>(kClipFileExtension.size()));
-      path = name.ok() ? ConfinedPath(*directory, absl::StrCat(clip->name, kClipFileExtension)) : name;
-    }
+    auto path = [&]() -> absl::StatusOr<std::string> {
+      auto directory = ConfinedPath(save_dir_, session.id);
+      if (!directory.ok()) return directory.status();
+      const int max_name = kMaxFileNameLength - static_cast<int>(kClipFileExtension.size());
+      if (absl::Status name = ValidateClipName(clip->name, max_name); !name.ok()) return name;
+      return ConfinedPath(*directory, absl::StrCat(clip->name, kClipFileExtension));
+    }();
     if (!path.ok()) {
       LogLine("session %s: not saving a generated clip: %s", session.id, path.status().ToString());
       continue;
     }
     std::error_code error;
-    std::filesystem::create_directories(*directory, error);
+    std::filesystem::create_directories(std::filesystem::path(*path).parent_path(), error);
     if (absl::Status status = WriteClipFile(*path, *clip); !status.ok()) {
       LogLine("session %s: could not save '%s': %s", session.id, *path, status.ToString());
     }
