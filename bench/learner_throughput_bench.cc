@@ -33,6 +33,8 @@ ABSL_FLAG(int, minibatch_size, 0, "PPO minibatch for the end-to-end measurement 
 ABSL_FLAG(int, update_threads, -1, "torch threads for the updates (-1: the small preset's)");
 ABSL_FLAG(double, amp_reward_weight, -1, "AMP reward weight (-1: the small preset's)");
 ABSL_FLAG(bool, networks, true, "measure the networks alone");
+ABSL_FLAG(std::vector<std::string>, modes, std::vector<std::string>({"sequential", "during_update"}),
+          "end-to-end collection modes to measure side by side: sequential, during_update");
 
 namespace modskill::learner {
 namespace {
@@ -155,20 +157,30 @@ int Run() {
     config.amp_reward_weight = absl::GetFlag(FLAGS_amp_reward_weight);
     config.task_reward_weight = 1 - config.amp_reward_weight;
   }
-  auto trainer = Trainer::Create(config);
-  if (!trainer.ok()) return std::fprintf(stderr, "error: %s\n", std::string(trainer.status().message()).c_str()), 1;
-  std::vector<double> rates, collect, update;
-  (void)(*trainer)->Run([&](const IterationStats& s) {
-    rates.push_back(s.env_steps_per_second);
-    collect.push_back(s.collect_seconds);
-    update.push_back(s.update_seconds);
-  });
   std::printf("\nend to end, 256 envs (2 sessions of 128, 1 server thread each), small preset, %d iterations of %d steps:\n",
               config.iterations, 256 * config.horizon);
   std::printf("  server alone (zero actions over gRPC):  %7.0f env steps/s\n", alone);
-  std::printf("  server + learner (collect + update):    %7.0f env steps/s  (%.2f x server alone)\n", Median(rates),
-              Median(rates) / alone);
-  std::printf("  per iteration: collect %.2f s, update %.2f s (medians)\n", Median(collect), Median(update));
+  // The modes one after the other on the same server; the first iteration of each (networks
+  // warming up, no collection yet running during an update) is not counted.
+  for (const std::string& mode : absl::GetFlag(FLAGS_modes)) {
+    if (mode != "sequential" && mode != "during_update") {
+      return std::fprintf(stderr, "error: --modes: unknown mode '%s'\n", mode.c_str()), 2;
+    }
+    config.collect_during_update = mode == "during_update";
+    auto trainer = Trainer::Create(config);
+    if (!trainer.ok()) return std::fprintf(stderr, "error: %s\n", std::string(trainer.status().message()).c_str()), 1;
+    std::vector<double> rates, collect, update;
+    (void)(*trainer)->Run([&](const IterationStats& s) {
+      if (s.iteration == 1) return;
+      rates.push_back(s.env_steps_per_second);
+      collect.push_back(s.collect_seconds);
+      update.push_back(s.update_seconds);
+    });
+    std::printf("  server + learner, collection %-14s %7.0f env steps/s  (%.2f x server alone); per iteration: "
+                "waiting for collection %.2f s, update %.2f s (medians)\n",
+                mode == "sequential" ? "then update:" : "during update:", Median(rates), Median(rates) / alone,
+                Median(collect), Median(update));
+  }
   (*server)->Shutdown(absl::Seconds(1));
   return 0;
 }

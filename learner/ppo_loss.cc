@@ -48,4 +48,11 @@ torch::Tensor NormalizeAdvantages(const torch::Tensor& a) {
   return (a - a.mean()) / (a.std(/*unbiased=*/false) + 1e-8);
 }
 
+torch::Tensor DecoupledAdvantages(const torch::Tensor& advantages, const torch::Tensor& proximal_log_prob,
+                                  const torch::Tensor& behaviour_log_prob, double max_weight) {
+  torch::NoGradGuard no_grad;
+  const torch::Tensor weight = torch::exp(proximal_log_prob - behaviour_log_prob).clamp_max(max_weight);
+  return advantages.detach() * weight;
+}
+
 }  // namespace modskill::learner

@@ -28,6 +28,15 @@ PpoLossTerms ComputePpoLoss(const torch::Tensor& new_log_prob, const torch::Tens
                             const torch::Tensor& old_values, const torch::Tensor& returns,
                             double clip_ratio, double value_clip, double value_coefficient);
 
+// Decoupled PPO (Hilton et al. 2021, "Batch size-invariance for policy optimization") for a batch
+// collected by older weights (the behaviour policy): the clipping is centred on the weights the
+// update starts from (the proximal policy; pass its log-probabilities as ComputePpoLoss's
+// old_log_prob), and each advantage is importance-weighted by pi_prox / pi_behaviour, truncated at
+// max_weight (V-trace's rho-bar, Espeholt et al. 2018) so that one stale action cannot dominate.
+// Returns the weighted advantages, detached.
+torch::Tensor DecoupledAdvantages(const torch::Tensor& advantages, const torch::Tensor& proximal_log_prob,
+                                  const torch::Tensor& behaviour_log_prob, double max_weight = 1.0);
+
 // (a - mean(a)) / (std(a) + 1e-8), with the population standard deviation, so a single
 // element normalizes to 0 rather than NaN. Detached.
 torch::Tensor NormalizeAdvantages(const torch::Tensor& a);

@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <charconv>
@@ -9,10 +10,14 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <utility>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/match.h"
 #include "absl/strings/str_join.h"
+#include "absl/strings/str_split.h"
+#include "server/core/atomic_file.h"
 
 namespace modskill::learner {
 namespace {
@@ -162,6 +167,29 @@ absl::Status TensorBoardWriter::WriteRecord(absl::string_view payload) {
 // ---------------------------------------------------------------------------------------------
 // CsvLogger
 
+namespace {
+
+// Rewrites the CSV at `path` (header `old_header`) under `new_header`, which extends it by
+// columns at the end; existing rows get empty values there. Atomic: a crash keeps the old file.
+absl::Status AppendColumns(const std::string& path, const std::string& old_header, const std::string& new_header) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream rows;
+  rows << in.rdbuf();
+  std::string text = rows.str();
+  const size_t body = text.find('\n');
+  const std::string padding(std::count(new_header.begin() + old_header.size(), new_header.end(), ','), ',');
+  std::string upgraded = new_header + "\n";
+  if (body != std::string::npos) {
+    for (absl::string_view line : absl::StrSplit(absl::string_view(text).substr(body + 1), '\n', absl::SkipEmpty())) {
+      if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+      absl::StrAppend(&upgraded, line, padding, "\n");
+    }
+  }
+  return WriteFileAtomically(path, upgraded);
+}
+
+}  // namespace
+
 absl::StatusOr<std::unique_ptr<CsvLogger>> CsvLogger::Open(
     const std::string& path, const std::vector<std::string>& columns) {
   if (columns.empty()) {
@@ -187,6 +215,11 @@ absl::StatusOr<std::unique_ptr<CsvLogger>> CsvLogger::Open(
       return IoError(absl::StrCat("read ", path));
     }
     if (!first_line.empty() && first_line.back() == '\r') first_line.pop_back();
+    if (first_line != header && absl::StartsWith(header, first_line + ",")) {
+      // A run from an older version, with fewer columns: its rows get empty new columns.
+      if (absl::Status status = AppendColumns(path, first_line, header); !status.ok()) return status;
+      first_line = header;
+    }
     if (first_line != header) {
       return absl::FailedPreconditionError(absl::StrCat("CSV log ", path, " has header '",
                                                         first_line, "', expected '", header,

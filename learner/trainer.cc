@@ -66,7 +66,10 @@ Trainer::Trainer(const TrainerConfig& config)
     : config_(config),
       curriculum_(config.curriculum_start > 0 ? config.curriculum_start : config.termination_distance,
                   config.curriculum_end > 0 ? config.curriculum_end : config.termination_distance),
-      generator_(at::detail::createCPUGenerator(config.seed)) {}
+      generator_(at::detail::createCPUGenerator(config.seed)),
+      acting_generator_(at::detail::createCPUGenerator(config.seed * 1000003 + 7919)) {}
+
+Trainer::~Trainer() { DiscardCollection(); }
 
 absl::StatusOr<std::unique_ptr<Trainer>> Trainer::Create(const TrainerConfig& config) {
   if (absl::Status status = config.Validate(); !status.ok()) return status;
@@ -168,6 +171,11 @@ absl::Status Trainer::BuildNetworks(const v1::EnvSpec& spec) {
 absl::Status Trainer::Run(const std::function<void(const IterationStats&)>& on_iteration,
                           const std::atomic<bool>* stop) {
   const int last = iteration_ + config_.iterations;
+  // A collection still running when the run ends was collected for an update that will not come.
+  struct DiscardAtExit {
+    Trainer* trainer;
+    ~DiscardAtExit() { trainer->DiscardCollection(); }
+  } discard{this};
   while (iteration_ < last) {
     if (stop != nullptr && stop->load()) break;
     absl::StatusOr<IterationStats> stats;
@@ -200,6 +208,13 @@ struct Trainer::SlotRollout {
   torch::Tensor reward_terms_sum;
 };
 
+// One collection: every live session's rollout, and what it ran under.
+struct Trainer::Collection {
+  std::vector<SlotRollout> rollouts;
+  double termination_distance = 0;
+  int64_t policy_version = 0;  // of the weights that acted
+};
+
 // The iteration's experience from every usable session, flattened to [T * N, ...].
 struct Trainer::TrainingBatch {
   torch::Tensor obs;  // normalized with the statistics of the iteration's start
@@ -217,17 +232,23 @@ struct Trainer::TrainingBatch {
 absl::StatusOr<IterationStats> Trainer::Iterate() {
   IterationStats stats;
   const auto start = Clock::now();
-  servers_->Reconnect(static_cast<int64_t>(config_.seed) + iteration_ + 1);
-  if (servers_->Alive().empty()) {
-    if (absl::Status status = WaitForServers(); !status.ok()) return status;
-  }
-  stats.termination_distance = curriculum_.distance();
-  std::vector<SlotRollout> rollouts = Collect();
-  std::vector<SlotRollout*> usable;
-  for (SlotRollout& r : rollouts) {
-    if (!r.failed) usable.push_back(&r);
+  Collection collection;
+  if (pending_.valid()) {
+    collection = std::move(*pending_.get());  // collected while the last update ran
+  } else {
+    servers_->Reconnect(static_cast<int64_t>(config_.seed) + iteration_ + 1);
+    if (servers_->Alive().empty()) {
+      if (absl::Status status = WaitForServers(); !status.ok()) return status;
+    }
+    collection = Collect(LiveNetworks());
   }
   stats.collect_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  stats.termination_distance = collection.termination_distance;
+  stats.policy_lag = static_cast<int>(policy_version_ - collection.policy_version);
+  std::vector<SlotRollout*> usable;
+  for (SlotRollout& r : collection.rollouts) {
+    if (!r.failed) usable.push_back(&r);
+  }
   if (usable.empty()) {
     // Every server failed during this iteration: nothing to learn from; try again.
     stats.iteration = iteration_;
@@ -235,24 +256,68 @@ absl::StatusOr<IterationStats> Trainer::Iterate() {
     LogLine("iteration %d: every session failed while collecting; retrying", iteration_ + 1);
     return stats;
   }
-  const TrainingBatch batch = ComputeReturns(usable);
+  SummarizeEpisodes(&stats);
+  TrainingBatch batch = ComputeReturns(usable);
+  if (stats.policy_lag > 0) CenterOnCurrentPolicy(&batch);
+  const torch::Tensor expert =
+      config_.amp_reward_weight > 0 ? FetchReferenceAmp(usable.front()->slot) : torch::Tensor();
+  if (config_.report_every > 0 && (iteration_ + 1) % config_.report_every == 0) ReportFailures();
+  if (config_.collect_during_update) {
+    servers_->Reconnect(static_cast<int64_t>(config_.seed) + iteration_ + 2);
+    if (!servers_->Alive().empty()) StartCollection();
+  }
   const auto update_start = Clock::now();
   UpdatePolicy(batch, &stats);
-  UpdateDiscriminator(batch, usable.front()->slot, &stats);
+  ++policy_version_;
+  if (expert.defined()) UpdateDiscriminator(batch, expert, &stats);
   ++iteration_;
   env_steps_ += static_cast<int64_t>(batch.samples);
-  if (config_.report_every > 0 && iteration_ % config_.report_every == 0) ReportFailures();
-
   stats.update_seconds = std::chrono::duration<double>(Clock::now() - update_start).count();
   stats.env_steps_per_second = batch.samples / std::chrono::duration<double>(Clock::now() - start).count();
   Summarize(batch, &stats);
   return stats;
 }
 
-std::vector<Trainer::SlotRollout> Trainer::Collect() {
+int Trainer::UpdateThreads() const {
+  // Collecting during the update, both share the cores with the servers: OpenMP threads spinning
+  // against each other cost 2x (bench/learner_throughput_bench).
+  return config_.collect_during_update ? 0 : config_.update_threads;
+}
+
+ActingNetworks Trainer::LiveNetworks() { return ActingNetworks{policy_, critic_, obs_norm_, policy_version_}; }
+
+void Trainer::StartCollection() {
+  if (!snapshot_.policy) {
+    snapshot_.policy = ModSkillPolicy(layout_, config_.model);
+    snapshot_.critic = Critic(layout_.obs_size, config_.model.critic_hidden);
+    snapshot_.obs_norm = RunningMeanStd(layout_.obs_size);
+  }
+  CopyModuleState(*policy_, *snapshot_.policy);
+  CopyModuleState(*critic_, *snapshot_.critic);
+  CopyModuleState(*obs_norm_, *snapshot_.obs_norm);
+  snapshot_.version = policy_version_;
+  pending_ = std::async(std::launch::async, [this] {
+    at::set_num_threads(1);  // the update and the servers have the cores
+    return std::make_shared<Collection>(Collect(snapshot_));
+  });
+}
+
+void Trainer::DiscardCollection() {
+  if (!pending_.valid()) return;
+  try {
+    pending_.get();
+  } catch (const std::exception& e) {
+    LogLine("the collection running at the end of the run failed: %s", e.what());
+  }
+}
+
+Trainer::Collection Trainer::Collect(ActingNetworks acting) {
   const int T = config_.horizon;
   const int64_t O = layout_.obs_size, A = layout_.action_size, M = layout_.amp_obs_size;
-  std::vector<SlotRollout> rollouts;
+  Collection collection;
+  collection.termination_distance = curriculum_.distance();
+  collection.policy_version = acting.version;
+  std::vector<SlotRollout>& rollouts = collection.rollouts;
   for (SessionSlot* slot : servers_->Alive()) {
     SlotRollout r;
     r.slot = slot;
@@ -267,7 +332,7 @@ std::vector<Trainer::SlotRollout> Trainer::Collect() {
     r.amp_next = torch::zeros({T, r.n, M});
     r.reward_terms_sum = torch::zeros({spec_.reward_terms_size()}, torch::kFloat64);
     // Every action message carries the distance, so a session that reopens gets it too.
-    slot->stream->SetTerminationDistance(static_cast<float>(curriculum_.distance()));
+    slot->stream->SetTerminationDistance(static_cast<float>(collection.termination_distance));
     rollouts.push_back(std::move(r));
   }
   auto fail = [&](SlotRollout& r, const absl::Status& status) {
@@ -290,7 +355,7 @@ std::vector<Trainer::SlotRollout> Trainer::Collect() {
     const SimulationStream& stream = *r.slot->stream;
     const bool fresh = stream.opened().initial().step() == 0 && stream.result().obs().data().empty();
     const v1::StepResult& result = fresh ? stream.opened().initial() : stream.result();
-    if (absl::Status status = Act(r, 0, ToTorch(result.obs(), {r.n, O})); !status.ok()) fail(r, status);
+    if (absl::Status status = Act(r, 0, ToTorch(result.obs(), {r.n, O}), acting); !status.ok()) fail(r, status);
   }
   for (int t = 0; t < T; ++t) {
     for (SlotRollout& r : rollouts) {
@@ -302,7 +367,7 @@ std::vector<Trainer::SlotRollout> Trainer::Collect() {
       RecordStep(r, t);
       const torch::Tensor next = ToTorch(r.slot->stream->result().obs(), {r.n, O});
       if (t + 1 < T) {
-        if (absl::Status status = Act(r, t + 1, next); !status.ok()) fail(r, status);
+        if (absl::Status status = Act(r, t + 1, next, acting); !status.ok()) fail(r, status);
       } else {
         r.next_obs = next;
       }
@@ -314,24 +379,24 @@ std::vector<Trainer::SlotRollout> Trainer::Collect() {
     recent_lengths_.erase(recent_lengths_.begin(), recent_lengths_.end() - keep);
     recent_tracked_.erase(recent_tracked_.begin(), recent_tracked_.end() - keep);
   }
-  return rollouts;
+  return collection;
 }
 
 // Observations are normalized with the statistics of the iteration's start and stored
 // normalized, so that PPO's ratios compare the same inputs; the statistics absorb the
 // iteration's observations after the update. (With sigma = exp(-2.9), drifting inputs alone
 // would move log-probabilities by tens of nats.)
-absl::Status Trainer::Act(SlotRollout& r, int t, const torch::Tensor& obs) {
+absl::Status Trainer::Act(SlotRollout& r, int t, const torch::Tensor& obs, ActingNetworks& acting) {
   torch::NoGradGuard no_grad;
-  const torch::Tensor normalized = obs_norm_->Normalize(obs);
+  const torch::Tensor normalized = acting.obs_norm->Normalize(obs);
   r.raw_obs.push_back(obs);
-  const torch::Tensor mean = policy_->forward(normalized);
-  const torch::Tensor log_std = policy_->log_std();
-  const torch::Tensor action = mean + log_std.exp() * torch::randn(mean.sizes(), generator_);
+  const torch::Tensor mean = acting.policy->forward(normalized);
+  const torch::Tensor log_std = acting.policy->log_std();
+  const torch::Tensor action = mean + log_std.exp() * torch::randn(mean.sizes(), acting_generator_);
   r.obs[t].copy_(normalized);
   r.actions[t].copy_(action);
   r.log_prob[t].copy_(ModSkillPolicyImpl::LogProb(mean, log_std, action));
-  r.values[t].copy_(critic_->forward(normalized));
+  r.values[t].copy_(acting.critic->forward(normalized));
   const torch::Tensor contiguous = action.contiguous();
   return r.slot->stream->SendActions(contiguous.data_ptr<float>());
 }
@@ -367,7 +432,7 @@ void Trainer::RecordStep(SlotRollout& r, int t) {
 
 Trainer::TrainingBatch Trainer::ComputeReturns(const std::vector<SlotRollout*>& usable) {
   torch::NoGradGuard no_grad;
-  const ScopedTorchThreads threads(config_.update_threads);  // the servers wait from here on
+  const ScopedTorchThreads threads(UpdateThreads());  // the servers wait from here on
   const int T = config_.horizon;
   const int64_t O = layout_.obs_size, A = layout_.action_size, M = layout_.amp_obs_size;
   TrainingBatch batch;
@@ -412,6 +477,22 @@ Trainer::TrainingBatch Trainer::ComputeReturns(const std::vector<SlotRollout*>& 
   return batch;
 }
 
+void Trainer::CenterOnCurrentPolicy(TrainingBatch* batch) {
+  torch::NoGradGuard no_grad;
+  const ScopedTorchThreads threads(UpdateThreads());
+  std::vector<torch::Tensor> proximal;
+  const torch::Tensor log_std = policy_->log_std();
+  const int64_t size = batch->obs.size(0), chunk = 4096;
+  for (int64_t begin = 0; begin < size; begin += chunk) {
+    const int64_t end = std::min(size, begin + chunk);
+    proximal.push_back(ModSkillPolicyImpl::LogProb(policy_->forward(batch->obs.slice(0, begin, end)), log_std,
+                                                   batch->actions.slice(0, begin, end)));
+  }
+  const torch::Tensor proximal_log_prob = torch::cat(proximal);
+  batch->advantages = DecoupledAdvantages(batch->advantages, proximal_log_prob, batch->old_log_prob);
+  batch->old_log_prob = proximal_log_prob;
+}
+
 torch::Tensor Trainer::SampleLiveAmp(const std::vector<torch::Tensor>& amp_rows,
                                     const std::vector<torch::Tensor>& live_rows) {
   int64_t live = 0;
@@ -435,7 +516,7 @@ torch::Tensor Trainer::SampleLiveAmp(const std::vector<torch::Tensor>& amp_rows,
 // update roll back to the weights it started from. The servers wait meanwhile, so the update may
 // use more threads than collection (config.update_threads).
 void Trainer::UpdatePolicy(const TrainingBatch& batch, IterationStats* stats) {
-  const ScopedTorchThreads threads(config_.update_threads);
+  const ScopedTorchThreads threads(UpdateThreads());
   std::vector<torch::Tensor> snapshot;
   for (const torch::Tensor& p : optimizer_->param_groups()[0].params()) snapshot.push_back(p.detach().clone());
   const torch::Tensor log_std = policy_->log_std();
@@ -488,9 +569,7 @@ void Trainer::UpdatePolicy(const TrainingBatch& batch, IterationStats* stats) {
   obs_norm_->Update(batch.raw_obs);
 }
 
-void Trainer::UpdateDiscriminator(const TrainingBatch& batch, SessionSlot* source, IterationStats* stats) {
-  if (!(config_.amp_reward_weight > 0) || batch.policy_amp.size(0) == 0) return;
-  const ScopedTorchThreads threads(config_.update_threads);
+torch::Tensor Trainer::FetchReferenceAmp(SessionSlot* source) {
   const int64_t M = layout_.amp_obs_size;
   v1::SampleReferenceAmpRequest request;
   request.set_session_id(source->stream->opened().session_id());
@@ -500,9 +579,14 @@ void Trainer::UpdateDiscriminator(const TrainingBatch& batch, SessionSlot* sourc
   if (!reference.ok()) {
     LogLine("iteration %d: no reference AMP samples (%s); discriminator not updated", iteration_ + 1,
             reference.status().message());
-    return;
+    return torch::zeros({0, M});
   }
-  const torch::Tensor expert = ToTorch(reference->amp_obs(), {config_.amp_samples, M});
+  return ToTorch(reference->amp_obs(), {config_.amp_samples, M});
+}
+
+void Trainer::UpdateDiscriminator(const TrainingBatch& batch, const torch::Tensor& expert, IterationStats* stats) {
+  if (batch.policy_amp.size(0) == 0 || expert.size(0) == 0) return;
+  const ScopedTorchThreads threads(UpdateThreads());
   amp_norm_->Update(torch::cat({expert, batch.policy_amp}));
   double loss_sum = 0, expert_logit = 0, policy_logit = 0, penalty = 0;
   for (int epoch = 0; epoch < config_.discriminator_epochs; ++epoch) {
@@ -538,6 +622,10 @@ void Trainer::Summarize(const TrainingBatch& batch, IterationStats* stats) {
   stats->mean_amp_reward = batch.amp_sum / batch.samples;
   const int64_t terms = std::min<int64_t>(batch.terms_sum.size(0), 8);
   for (int64_t k = 0; k < terms; ++k) stats->reward_terms[k] = batch.terms_sum[k].item<double>() / batch.samples;
+  stats->live_sessions = batch.live_sessions;
+}
+
+void Trainer::SummarizeEpisodes(IterationStats* stats) {
   if (!recent_returns_.empty()) {
     double r = 0, l = 0, tracked = 0;
     for (size_t i = 0; i < recent_returns_.size(); ++i) {
@@ -550,7 +638,6 @@ void Trainer::Summarize(const TrainingBatch& batch, IterationStats* stats) {
     stats->tracked_share = tracked / recent_tracked_.size();
     curriculum_.Update(stats->tracked_share);
   }
-  stats->live_sessions = batch.live_sessions;
 }
 
 void Trainer::RecordEpisodeEnds(SessionSlot* slot, const v1::StepResult& result) {

@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <functional>
+#include <future>
 #include <map>
 #include <memory>
 #include <string>
@@ -15,6 +16,7 @@
 #include <torch/torch.h>
 
 #include "absl/status/status.h"
+#include "learner/acting_networks.h"
 #include "learner/amp_discriminator.h"
 #include "learner/critic.h"
 #include "learner/modskill_policy.h"
@@ -43,11 +45,15 @@ struct IterationStats {
   int skipped_updates = 0;  // minibatches skipped for a non-finite loss
   double termination_distance = 0;  // m, the distance this iteration's episodes ran under
   double tracked_share = 0;         // recently ended episodes that reached their clip's end
+  // Policy updates between the weights that collected this iteration's batch and the weights it
+  // updates: 0, or 1 when collection runs during the update (config.collect_during_update).
+  int policy_lag = 0;
 };
 
 class Trainer {
  public:
   static absl::StatusOr<std::unique_ptr<Trainer>> Create(const TrainerConfig& config);
+  ~Trainer();
 
   // Runs config.iterations iterations (after those of a resumed run). `on_iteration` sees each
   // iteration's figures. Returns when done, when `stop` becomes true, or on a fatal error.
@@ -74,25 +80,42 @@ class Trainer {
   absl::Status WaitForServers();
   absl::Status BuildNetworks(const v1::EnvSpec& spec);
   // One PPO iteration, in the phases of the algorithm box: collect, returns, policy update,
-  // discriminator update, summary.
+  // discriminator update, summary. With config.collect_during_update the next iteration's
+  // collection runs on its own thread, with the weights from before the update, while the update runs.
   absl::StatusOr<IterationStats> Iterate();
   struct SlotRollout;
   struct TrainingBatch;
-  // Steps every live session `horizon` times with the current policy (round robin: while one
-  // session's server steps, the learner computes another's actions).
-  std::vector<SlotRollout> Collect();
+  struct Collection;
+  // Steps every live session `horizon` times with `acting` (round robin: while one session's
+  // server steps, the learner computes another's actions).
+  Collection Collect(ActingNetworks acting);
   // Samples actions for `obs` into step t of `r` and sends them.
-  absl::Status Act(SlotRollout& r, int t, const torch::Tensor& obs);
+  absl::Status Act(SlotRollout& r, int t, const torch::Tensor& obs, ActingNetworks& acting);
   // Books one step result of `r` (rewards, dones, episode ends) at step t.
   void RecordStep(SlotRollout& r, int t);
+  // Torch threads for the update phases (0: keep the current number).
+  int UpdateThreads() const;
+  // The networks being trained, for a collection that waits for its update.
+  ActingNetworks LiveNetworks();
+  // Starts collecting the next batch on its own thread with a copy of the current weights.
+  void StartCollection();
+  // Waits for a collection started by StartCollection and drops it (end of a run).
+  void DiscardCollection();
   // AMP rewards, then GAE per session; concatenates the sessions' experience.
   TrainingBatch ComputeReturns(const std::vector<SlotRollout*>& usable);
+  // A batch collected by older weights: PPO's clipping is centred on the current weights and the
+  // advantages importance-weighted toward them (decoupled PPO, ppo_loss.h).
+  void CenterOnCurrentPolicy(TrainingBatch* batch);
   // amp_samples x discriminator_epochs random rows of `amp_rows` (one tensor per session) among
   // its `live_rows` (indices of rows whose episode did not end).
   torch::Tensor SampleLiveAmp(const std::vector<torch::Tensor>& amp_rows, const std::vector<torch::Tensor>& live_rows);
   void UpdatePolicy(const TrainingBatch& batch, IterationStats* stats);
-  // Reference AMP samples from `source`'s server against the policy's own.
-  void UpdateDiscriminator(const TrainingBatch& batch, SessionSlot* source, IterationStats* stats);
+  // amp_samples reference AMP observations from `source`'s server ([0, M] when it cannot answer).
+  torch::Tensor FetchReferenceAmp(SessionSlot* source);
+  // The discriminator: `expert` (reference) samples against the policy's own.
+  void UpdateDiscriminator(const TrainingBatch& batch, const torch::Tensor& expert, IterationStats* stats);
+  // Episode figures of the recently ended episodes; moves the termination curriculum.
+  void SummarizeEpisodes(IterationStats* stats);
   void Summarize(const TrainingBatch& batch, IterationStats* stats);
   // Notes how the episodes that ended in `result` went, for the session's failure report.
   void RecordEpisodeEnds(SessionSlot* slot, const v1::StepResult& result);
@@ -120,7 +143,11 @@ class Trainer {
   std::vector<double> recent_tracked_;  // 1 where a recent episode reached its clip's end
   TerminationCurriculum curriculum_{0.25, 0.25};
   std::unordered_map<SessionSlot*, size_t> slot_index_;  // into episode_return_ / episode_length_
-  torch::Generator generator_;
+  torch::Generator generator_;         // minibatches and AMP draws (the update's thread)
+  torch::Generator acting_generator_;  // action noise (the collection's thread)
+  int64_t policy_version_ = 0;         // policy updates so far
+  ActingNetworks snapshot_;            // the weights a collection during the update acts with
+  std::future<std::shared_ptr<Collection>> pending_;  // that collection
   // Failure lists not yet reported, per session (keyed by slot and its session generation).
   struct PendingReports {
     int64_t generation = -1;

@@ -110,6 +110,7 @@ std::string TrainerConfig::ToJson() const {
   json["termination_distance"] = termination_distance;
   json["termination_bodies"] = termination_bodies;
   json["update_threads"] = update_threads;
+  json["collect_during_update"] = collect_during_update;
   json["termination_curriculum"] = {curriculum_start, curriculum_end};
   return json.dump(1);
 }

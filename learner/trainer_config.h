@@ -37,6 +37,11 @@ struct TrainerConfig {
   // Torch threads for the PPO and discriminator updates, while the servers wait (0: keep the
   // collection's).
   int update_threads = 2;
+  // Collect the next batch while the update runs, acting with the weights from before the update
+  // (a policy lag of one update; PPO's ratios are taken against those behaviour weights). Pays off
+  // when the servers run on other machines; on one 2-core machine both phases share the cores.
+  // The update then keeps the collection's torch threads (update_threads is not used).
+  bool collect_during_update = false;
 
   // What to learn with.
   ModelConfig model;

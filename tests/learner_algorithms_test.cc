@@ -190,6 +190,17 @@ TEST(PpoLossTest, NormalizeAdvantages) {
   EXPECT_FALSE(NormalizeAdvantages(a).requires_grad());
 }
 
+TEST(PpoLossTest, DecoupledAdvantagesWeighTowardTheProximalPolicy) {
+  // pi_prox / pi_behaviour = e^-1, 1 and e^2 (truncated at 1): weights 0.3679, 1, 1.
+  const torch::Tensor advantages = T({2, -3, 4});
+  const torch::Tensor behaviour = T({-1, -2, -5});
+  const torch::Tensor proximal = T({-2, -2, -3});
+  ExpectTensorNear(DecoupledAdvantages(advantages, proximal, behaviour), T({0.735759f, -3, 4}));
+  // A larger truncation lets the third weight through.
+  ExpectTensorNear(DecoupledAdvantages(advantages, proximal, behaviour, 10.0), T({0.735759f, -3, 29.556224f}));
+  EXPECT_FALSE(DecoupledAdvantages(advantages.requires_grad_(true), proximal, behaviour).requires_grad());
+}
+
 // ------------------------------------------------------------------------------------------
 // AMP
 
@@ -500,15 +511,31 @@ TEST_F(CsvLoggerTest, HeaderAppendAndResume) {
   }
   EXPECT_EQ(ReadFile(path), "step,loss\n1,0.5\n2,0.1\n3,-1\n1234567,1e-09\n");
 
-  auto mismatched = CsvLogger::Open(path, {"step", "loss", "kl"});
+  auto mismatched = CsvLogger::Open(path, {"step", "kl"});
   ASSERT_FALSE(mismatched.ok());
   EXPECT_EQ(mismatched.status().code(), absl::StatusCode::kFailedPrecondition);
   EXPECT_THAT(mismatched.status().message(), HasSubstr(path));
-  EXPECT_THAT(mismatched.status().message(), HasSubstr("step,loss,kl"));
+  EXPECT_THAT(mismatched.status().message(), HasSubstr("step,kl"));
+  EXPECT_FALSE(CsvLogger::Open(path, {"step"}).ok()) << "fewer columns than the file is not a resume";
   EXPECT_EQ(ReadFile(path), "step,loss\n1,0.5\n2,0.1\n3,-1\n1234567,1e-09\n");  // untouched
 
   EXPECT_FALSE(CsvLogger::Open(path, {}).ok());
   EXPECT_FALSE(CsvLogger::Open(path, {"a,b"}).ok());
+}
+
+TEST_F(CsvLoggerTest, ResumeUnderMoreColumnsPadsTheOldRows) {
+  // A run from an older version, resumed by one that logs more columns at the end.
+  const std::string path = (dir_ / "progress.csv").string();
+  std::ofstream(path) << "step,loss\n1,0.5\n2,0.1\n";
+  {
+    auto logger = CsvLogger::Open(path, {"step", "loss", "kl", "lag"});
+    ASSERT_TRUE(logger.ok()) << logger.status();
+    ASSERT_TRUE((*logger)->Append({3, 0.25, 0.01, 1}).ok());
+  }
+  EXPECT_EQ(ReadFile(path), "step,loss,kl,lag\n1,0.5,,\n2,0.1,,\n3,0.25,0.01,1\n");
+  // "ste" is a prefix of the header's text, not of its columns.
+  std::ofstream(path) << "ste\n1\n";
+  EXPECT_FALSE(CsvLogger::Open(path, {"step", "loss"}).ok());
 }
 
 TEST_F(CsvLoggerTest, ResumeAfterTornRowStartsANewLine) {

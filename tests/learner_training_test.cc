@@ -145,13 +145,18 @@ TEST(LearnerTrainingTest, CheckpointRoundTripAndResume) {
   server->Shutdown(absl::Seconds(1));
 }
 
-TEST(LearnerTrainingTest, KillingOneOfTwoServersDoesNotStopTraining) {
+class ServerFailoverTest : public ::testing::TestWithParam<bool> {};
+
+// Both collection modes: sequential, and collecting on its own thread during the update (where a
+// server dies while the other thread streams to it).
+TEST_P(ServerFailoverTest, KillingOneOfTwoServersDoesNotStopTraining) {
   auto a = StartTestServer();
   ServerOptions options_b;
   auto b = StartTestServer(options_b);
   const int port_b = b->port();
-  TrainerConfig config = SmallConfig({a->port(), port_b}, RunDir("failover"));
+  TrainerConfig config = SmallConfig({a->port(), port_b}, RunDir(GetParam() ? "failover_during" : "failover"));
   config.iterations = 10;
+  config.collect_during_update = GetParam();
   auto trainer = Trainer::Create(config);
   ASSERT_TRUE(trainer.ok()) << trainer.status();
   std::vector<int> live;
@@ -175,11 +180,17 @@ TEST(LearnerTrainingTest, KillingOneOfTwoServersDoesNotStopTraining) {
   ASSERT_EQ(live.size(), 10u);
   EXPECT_EQ(live[0], 4);
   EXPECT_EQ(live[1], 4);
-  EXPECT_EQ(live[3], 2) << "after B died only A's sessions take part";
+  // Collecting during the update, iteration 3's collection may have finished before B died.
+  EXPECT_EQ(live[GetParam() ? 4 : 3], 2) << "after B died only A's sessions take part";
   EXPECT_EQ(live.back(), 4) << "B rejoins after it comes back";
   a->Shutdown(absl::Seconds(1));
   restarted->Shutdown(absl::Seconds(1));
 }
+
+INSTANTIATE_TEST_SUITE_P(CollectionModes, ServerFailoverTest, ::testing::Bool(),
+                         [](const ::testing::TestParamInfo<bool>& info) {
+                           return info.param ? "CollectDuringUpdate" : "Sequential";
+                         });
 
 TEST(LearnerTrainingTest, NoServerFailsWithAClearMessageAfterTheTimeout) {
   TrainerConfig config = SmallConfig({1}, RunDir("noserver"));  // nothing listens on port 1
@@ -266,6 +277,49 @@ TEST(LearnerTrainingTest, ReturnRisesOnASingleClip) {
   EXPECT_GT(mean_return(n - 3, n), 1.1 * mean_return(0, 3))
       << "first " << mean_return(0, 3) << " last " << mean_return(n - 3, n);
   std::printf("mean episode return: first 3 iterations %.3f, last 3 %.3f\n", mean_return(0, 3), mean_return(n - 3, n));
+  server->Shutdown(absl::Seconds(1));
+}
+
+// Collection during the update acts with the weights from before it: a lag of one update from
+// the second iteration on, every step counted once, and the return still rises.
+TEST(LearnerTrainingTest, CollectingDuringTheUpdateLagsByOneUpdateAndLearns) {
+  ServerOptions options;
+  options.service.generation.enabled = false;
+  auto server = StartTestServer(options);
+  TrainerConfig config = SmallConfig({server->port()}, RunDir("during_update"));
+  config.motions = {"deepmimic_walk"};
+  config.envs_per_server = 64;
+  config.horizon = 16;
+  config.minibatch_size = 256;
+  config.epochs = 3;
+  config.iterations = 12;
+  config.checkpoint_every = 100;
+  config.action_mode = "absolute";
+  config.termination_bodies = "all";
+  config.collect_during_update = true;
+  auto trainer = Trainer::Create(config);
+  ASSERT_TRUE(trainer.ok());
+  ASSERT_TRUE((*trainer)->Run().ok());
+  const auto& history = (*trainer)->history();
+  ASSERT_EQ(history.size(), 12u);
+  EXPECT_EQ(history[0].policy_lag, 0);
+  for (size_t i = 1; i < history.size(); ++i) EXPECT_EQ(history[i].policy_lag, 1) << "iteration " << i + 1;
+  EXPECT_EQ((*trainer)->env_steps(), 12 * 64 * 16);
+  auto mean_return = [&](size_t begin, size_t end) {
+    double sum = 0;
+    for (size_t i = begin; i < end; ++i) sum += history[i].mean_episode_return;
+    return sum / (end - begin);
+  };
+  // Slower than without lag at this tiny batch (1,024 steps; measured 1.21 -> 1.29 over 12
+  // iterations against 1.20 -> 1.50 sequentially; first and last three 1.21 and 1.26).
+  const size_t n = history.size();
+  EXPECT_GT(mean_return(n - 3, n), 1.03 * mean_return(0, 3))
+      << "first " << mean_return(0, 3) << " last " << mean_return(n - 3, n);
+  std::printf("mean episode return with a lag of one update: first 3 iterations %.3f, last 3 %.3f\n",
+              mean_return(0, 3), mean_return(n - 3, n));
+  // The next run starts with no collection left over: a second Run continues cleanly.
+  ASSERT_TRUE((*trainer)->Run().ok());
+  EXPECT_EQ((*trainer)->iteration(), 24);
   server->Shutdown(absl::Seconds(1));
 }
 

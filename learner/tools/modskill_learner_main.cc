@@ -55,6 +55,8 @@ ABSL_FLAG(std::string, termination_bodies, "",
 ABSL_FLAG(std::string, termination_curriculum, "",
           "START:END (m): start loose and tighten toward END as episodes reach their clip's end");
 ABSL_FLAG(int, update_threads, 2, "torch threads for the updates, while the servers wait (0: as --threads)");
+ABSL_FLAG(bool, collect_during_update, false,
+          "collect the next batch while the update runs, with the weights from before it (policy lag 1)");
 ABSL_FLAG(uint64_t, seed, 1, "random seed");
 ABSL_FLAG(int, checkpoint_every, 10, "iterations between checkpoints");
 ABSL_FLAG(int, report_every, 5, "iterations between failure reports to the servers' samplers (0: never)");
@@ -183,6 +185,7 @@ int RunTraining(const std::string& token) {
     }
   }
   config->update_threads = absl::GetFlag(FLAGS_update_threads);
+  config->collect_during_update = absl::GetFlag(FLAGS_collect_during_update);
   config->seed = absl::GetFlag(FLAGS_seed);
   config->checkpoint_every = absl::GetFlag(FLAGS_checkpoint_every);
   config->report_every = absl::GetFlag(FLAGS_report_every);
@@ -201,7 +204,7 @@ int RunTraining(const std::string& token) {
       "episode_length", "reward_pos", "reward_rot", "reward_vel", "reward_ang_vel", "reward_energy", "policy_loss",
       "value_loss", "approx_kl", "clip_fraction", "discriminator_loss", "expert_logit", "policy_logit",
       "gradient_penalty", "live_sessions", "wall_seconds", "termination_distance", "tracked_share",
-      "collect_seconds", "update_seconds"};
+      "collect_seconds", "update_seconds", "policy_lag"};
   auto csv = CsvLogger::Open(config->run_dir + "/progress.csv", columns);
   if (!csv.ok()) return Fail(std::string(csv.status().message()));
 
@@ -223,14 +226,13 @@ int RunTraining(const std::string& token) {
         std::printf(
             "it %4d/%d | %9lld steps %5.0f/s | reward %.3f amp %.3f | return %6.2f len %5.1f | "
             "pos %.3f rot %.3f vel %.3f ang %.3f energy %.3f | pi %+.4f v %.4f kl %.4f clip %.3f | "
-            "D %.3f (expert %+.2f policy %+.2f) | term %.2fm tracked %.2f | sessions %d | collect %.1fs update %.1fs | "
+            "D %.3f (expert %+.2f policy %+.2f) | term %.2fm tracked %.2f | sessions %d | collect %.1fs update %.1fs lag %d | "
             "left %s\n",
             s.iteration, last, static_cast<long long>(s.env_steps), s.env_steps_per_second, s.mean_task_reward,
             s.mean_amp_reward, s.mean_episode_return, s.mean_episode_length, s.reward_terms[0], s.reward_terms[1],
             s.reward_terms[2], s.reward_terms[3], s.reward_terms[4], s.policy_loss, s.value_loss, s.approx_kl,
             s.clip_fraction, s.discriminator_loss, s.expert_logit, s.policy_logit, s.termination_distance,
-            s.tracked_share, s.live_sessions, s.collect_seconds,
-            s.update_seconds,
+            s.tracked_share, s.live_sessions, s.collect_seconds, s.update_seconds, s.policy_lag,
             absl::FormatDuration(absl::Seconds(std::round(left))).c_str());
         std::fflush(stdout);
         const std::vector<double> row = {
@@ -238,7 +240,7 @@ int RunTraining(const std::string& token) {
             s.mean_episode_return, s.mean_episode_length, s.reward_terms[0], s.reward_terms[1], s.reward_terms[2],
             s.reward_terms[3], s.reward_terms[4], s.policy_loss, s.value_loss, s.approx_kl, s.clip_fraction,
             s.discriminator_loss, s.expert_logit, s.policy_logit, s.gradient_penalty, double(s.live_sessions), elapsed,
-            s.termination_distance, s.tracked_share, s.collect_seconds, s.update_seconds};
+            s.termination_distance, s.tracked_share, s.collect_seconds, s.update_seconds, double(s.policy_lag)};
         for (size_t c = 2; c < columns.size(); ++c) (void)(*events)->AddScalar(columns[c], s.env_steps, row[c]);
         (void)(*events)->Flush();
         (void)(*csv)->Append(row);
