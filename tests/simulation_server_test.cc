@@ -73,6 +73,7 @@ class SimulationServerTest : public ::testing::Test {
     options.service.max_upload_bytes = 1 << 20;
     // Generative resampling has its own tests (generative_resampling_test.cc); here clip sets stay fixed.
     options.service.generation.enabled = false;
+    options.service.checkpoint_dirs = {TempDir()};  // where ZeroPolicy() writes
     server_ = StartTestServer(options);
     ASSERT_NE(server_, nullptr);
     client_ = ConnectTo(*server_);
@@ -753,7 +754,7 @@ TEST_F(SimulationServerTest, RolloutBadInputs) {
   v1::RolloutRequest request;
   expect(request, absl::StatusCode::kInvalidArgument, "checkpoint");
   request.set_checkpoint_path(TempDir() + "/missing.pt");
-  expect(request, absl::StatusCode::kNotFound, "missing.pt");
+  expect(request, absl::StatusCode::kNotFound, "checkpoint_path");
   const std::string garbage = TempDir() + "/garbage.pt";
   ASSERT_TRUE(WriteFileAtomically(garbage, "this is not a zip archive").ok());
   request.set_checkpoint_path(garbage);
@@ -833,6 +834,15 @@ TEST(PolicySpecTest, OldSpecsLoadAsAbsoluteAndBadModesAreRefused) {
   auto refused = PolicySpec::FromJson(bad);
   ASSERT_FALSE(refused.ok());
   EXPECT_THAT(std::string(refused.status().message()), HasSubstr("action_mode"));
+  // Sizes are checked as written: 2^40 is reported as such, not as 0 after a cast.
+  std::string huge = old_json;
+  huge.replace(huge.find("934"), 3, "1099511627776");
+  auto too_big = PolicySpec::FromJson(huge);
+  ASSERT_FALSE(too_big.ok());
+  EXPECT_THAT(std::string(too_big.status().message()), HasSubstr("obs_size: 1099511627776"));
+  std::string fractional = old_json;
+  fractional.replace(fractional.find("69"), 2, "69.5");
+  EXPECT_FALSE(PolicySpec::FromJson(fractional).ok());
 }
 
 TEST_F(SimulationServerTest, AddMotionsUploadsAndValidates) {

@@ -44,7 +44,9 @@ ABSL_FLAG(std::string, checkpoint, "",
 ABSL_FLAG(std::vector<std::string>, clip, {},
           "rollout, simulate: clip names, repeated or comma-separated (empty: every clip)");
 ABSL_FLAG(std::string, out, "", "rollout: write metrics, per-body errors (and frames) as JSON to this file");
-ABSL_FLAG(bool, upload, false, "rollout: send the checkpoint file's bytes instead of its path");
+ABSL_FLAG(bool, upload, true,
+          "rollout: send the checkpoint file's bytes; false: send its path, which the server reads only from its "
+          "--checkpoint_dir directories");
 ABSL_FLAG(bool, frames, false, "rollout: stream per-frame simulated and reference body positions into --out");
 ABSL_FLAG(int, envs, 16, "simulate: envs in the session");
 ABSL_FLAG(int, steps, 100, "simulate: steps to take");

@@ -6,6 +6,7 @@
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "server/core/shown_value.h"
 
 namespace modskill {
 namespace {
@@ -14,27 +15,11 @@ bool AllowedChar(char c) {
   return absl::ascii_isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.' || c == '~';
 }
 
-// The name as a message may show it: bounded, control and non-ASCII bytes escaped.
-std::string Shown(absl::string_view name) {
-  constexpr size_t kShown = 64;
-  std::string shown;
-  for (char c : name.substr(0, kShown)) {
-    const unsigned char u = static_cast<unsigned char>(c);
-    if (u >= 0x20 && u < 0x7F) {
-      shown.push_back(c);
-    } else {
-      absl::StrAppendFormat(&shown, "\\x%02x", u);
-    }
-  }
-  if (name.size() > kShown) shown += "...";
-  return shown;
-}
-
 }  // namespace
 
 absl::Status ValidateClipName(absl::string_view name, int max_length, absl::string_view field) {
   auto bad = [&](absl::string_view why) {
-    return absl::InvalidArgumentError(absl::StrCat(field, " '", Shown(name), "': ", why));
+    return absl::InvalidArgumentError(absl::StrCat(field, " '", ShownValue(name), "': ", why));
   };
   if (name.empty()) return absl::InvalidArgumentError(absl::StrCat(field, ": empty clip name"));
   if (name.size() > static_cast<size_t>(max_length)) {

@@ -4,7 +4,9 @@
 #ifndef MODSKILL_SERVER_CORE_CONFINED_PATH_H_
 #define MODSKILL_SERVER_CORE_CONFINED_PATH_H_
 
+#include <cstdint>
 #include <string>
+#include <vector>
 
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
@@ -18,6 +20,14 @@ inline constexpr int kMaxFileNameLength = 255;
 // or the result would lie outside `directory` (which need not exist yet), or when it names a
 // symbolic link.
 absl::StatusOr<std::string> ConfinedPath(const std::string& directory, absl::string_view file_name);
+
+// Reads the regular file `path` (absolute, or relative to each of `directories` in turn) when it
+// lies in one of `directories` once links are resolved, and is at most `max_bytes` long. The
+// answer for a path outside them is PermissionDenied, the same whether the file exists or not,
+// so that a client cannot probe the rest of the file system; NotFound only for a file missing
+// inside them. Messages start with `field`. No directories: every path is PermissionDenied.
+absl::StatusOr<std::string> ReadConfinedFile(const std::vector<std::string>& directories, const std::string& path,
+                                             int64_t max_bytes, absl::string_view field);
 
 }  // namespace modskill
 

@@ -7,11 +7,13 @@
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
 #include "server/core/mjcf_builder.h"
+#include "server/core/mujoco_warnings.h"
 
 namespace modskill {
 
 absl::StatusOr<std::shared_ptr<const HumanoidModel>> HumanoidModel::Create(const HumanoidSpec& spec,
                                                                            const PhysicsOptions& options) {
+  RouteMujocoWarningsToLog();  // before MuJoCo can write MUJOCO_LOG.TXT
   if (!(options.control_hz > 0 && options.control_hz <= 1000)) {
     return absl::InvalidArgumentError(absl::StrCat("control_hz: ", options.control_hz, " outside (0, 1000]"));
   }

@@ -7,6 +7,7 @@
 #include "absl/strings/str_join.h"
 #include "server/core/atomic_file.h"
 #include "server/core/data_paths.h"
+#include "server/core/shown_value.h"
 
 namespace modskill {
 
@@ -90,7 +91,8 @@ absl::StatusOr<PartLayoutCatalog> PartLayoutCatalog::LoadDefault(const HumanoidS
 absl::StatusOr<PartLayout> PartLayoutCatalog::Get(absl::string_view name) const {
   auto it = layouts_.find(std::string(name));
   if (it == layouts_.end()) {
-    return absl::NotFoundError(absl::StrCat("part_layout: unknown layout '", name, "' (known: ", absl::StrJoin(Names(), ", "), ")"));
+    return absl::NotFoundError(absl::StrCat("part_layout: unknown layout '", ShownValue(name), "' (known: ",
+                                            absl::StrJoin(Names(), ", "), ")"));
   }
   return it->second;
 }

@@ -13,8 +13,15 @@
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
 #include "server/core/atomic_file.h"
+#include "server/core/shown_value.h"
 
 namespace modskill {
+namespace {
+
+// Largest observation or action vector a policy file may declare (the humanoid's are ~1000).
+constexpr int64_t kMaxPolicyVectorSize = 1 << 20;
+
+}  // namespace
 
 PolicySpec PolicySpec::FromEnvSpec(const EnvSpec& spec) {
   PolicySpec policy;
@@ -44,12 +51,36 @@ absl::StatusOr<PolicySpec> PolicySpec::FromJson(absl::string_view text) {
     return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": not a JSON object"));
   }
   PolicySpec spec;
+  // Sizes are read as they are written, not cast: 2^40 must not become 0.
+  auto size = [&](const char* key) -> absl::StatusOr<int> {
+    const nlohmann::json& value = json.at(key);
+    if (!value.is_number_integer() || value.get<int64_t>() < 1 || value.get<int64_t>() > kMaxPolicyVectorSize) {
+      return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": ", key, ": ", value.dump().substr(0, 32),
+                                                     " is not an integer in [1, ", kMaxPolicyVectorSize, "]"));
+    }
+    return static_cast<int>(value.get<int64_t>());
+  };
   try {
     spec.part_layout = json.at("part_layout").get<std::string>();
-    spec.obs_size = json.at("obs_size").get<int>();
-    spec.action_size = json.at("action_size").get<int>();
+    if (spec.part_layout.size() > kMaxShownValueBytes) {
+      return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": part_layout: ", spec.part_layout.size(),
+                                                     " characters, longer than any layout name"));
+    }
+    auto obs_size = size("obs_size");
+    if (!obs_size.ok()) return obs_size.status();
+    spec.obs_size = *obs_size;
+    auto action_size = size("action_size");
+    if (!action_size.ok()) return action_size.status();
+    spec.action_size = *action_size;
     spec.joint_names = json.at("joint_names").get<std::vector<std::string>>();
+    if (static_cast<int64_t>(spec.joint_names.size()) > kMaxPolicyVectorSize) {
+      return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": joint_names: too many"));
+    }
     spec.control_dt = json.at("control_dt").get<double>();
+    if (!(spec.control_dt > 0 && spec.control_dt < 10)) {
+      return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": control_dt: ", spec.control_dt,
+                                                     " is not in (0, 10) s"));
+    }
     if (json.contains("action_mode")) {
       auto mode = ParseActionMode(json.at("action_mode").get<std::string>());
       if (!mode.ok()) return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": action_mode: ", mode.status().message()));
@@ -57,7 +88,7 @@ absl::StatusOr<PolicySpec> PolicySpec::FromJson(absl::string_view text) {
     }
     if (json.contains("residual_scale")) spec.action.residual_scale = json.at("residual_scale").get<double>();
   } catch (const nlohmann::json::exception& e) {
-    return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": ", e.what()));
+    return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": ", ShownValue(e.what())));
   }
   if (absl::Status status = spec.action.Validate(); !status.ok()) {
     return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": ", status.message()));

@@ -2,6 +2,7 @@
 
 #include <cstring>
 
+#include "server/service/status_text.h"
 #include "server/service/tensor_codec.h"
 
 namespace modskill {
@@ -95,7 +96,7 @@ void FillStepResult(const EnvBatch& batch, int64_t step, int amp_frames, v1::Ste
 
 grpc::Status ToGrpcStatus(const absl::Status& status) {
   if (status.ok()) return grpc::Status::OK;
-  return grpc::Status(static_cast<grpc::StatusCode>(status.code()), std::string(status.message()));
+  return CappedStatus(static_cast<grpc::StatusCode>(status.code()), status.message());
 }
 
 }  // namespace modskill

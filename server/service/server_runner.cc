@@ -18,7 +18,10 @@ absl::StatusOr<std::unique_ptr<RunningServer>> StartServer(const ServerOptions& 
   if (options.port < 0 || options.port > 65535) {
     return absl::InvalidArgumentError(absl::StrCat("port: ", options.port, " outside [0, 65535]"));
   }
-  auto service = SimulationService::Create(options.service, std::move(motions));
+  ServiceOptions service_options = options.service;
+  // Responses that would not fit the message limit are refused up front, naming the field.
+  service_options.max_response_bytes = options.max_message_bytes;
+  auto service = SimulationService::Create(service_options, std::move(motions));
   if (!service.ok()) return service.status();
   std::shared_ptr<grpc::ServerCredentials> credentials = grpc::InsecureServerCredentials();
   if (!options.tls_cert_file.empty() || !options.tls_key_file.empty()) {

@@ -9,17 +9,20 @@
 #include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
 #include "server/core/clip_file.h"
+#include "server/core/confined_path.h"
 #include "server/core/motion_import.h"
 #include "server/service/discriminator_scorer.h"
 #include "server/service/policy_checkpoint.h"
 #include "server/service/proto_conversions.h"
 #include "server/service/server_log.h"
+#include "server/core/shown_value.h"
+#include "server/service/status_text.h"
 #include "server/service/tensor_codec.h"
 
 namespace modskill {
 namespace {
 
-grpc::Status Error(grpc::StatusCode code, const std::string& message) { return grpc::Status(code, message); }
+grpc::Status Error(grpc::StatusCode code, const std::string& message) { return CappedStatus(code, message); }
 
 // Constant-time comparison, so a wrong token does not leak its matching prefix length.
 bool SameSecret(const std::string& a, const std::string& b) {
@@ -361,7 +364,7 @@ grpc::Status SimulationService::ReportFailures(grpc::ServerContext* context, con
   if (auto auth = CheckAuth(context); !auth.ok()) return auth;
   std::shared_ptr<SimulationSession> session = registry_.Find(request->session_id());
   if (session == nullptr) {
-    return Error(grpc::StatusCode::NOT_FOUND, absl::StrCat("session_id: no open session '", request->session_id(), "'"));
+    return Error(grpc::StatusCode::NOT_FOUND, absl::StrCat("session_id: no open session '", ShownValue(request->session_id()), "'"));
   }
   std::vector<NamedClipReport> reports;
   reports.reserve(request->failures_size());
@@ -393,15 +396,23 @@ grpc::Status SimulationService::SampleReferenceAmp(grpc::ServerContext* context,
   if (auto auth = CheckAuth(context); !auth.ok()) return auth;
   std::shared_ptr<SimulationSession> session = registry_.Find(request->session_id());
   if (session == nullptr) {
-    return Error(grpc::StatusCode::NOT_FOUND, absl::StrCat("session_id: no open session '", request->session_id(), "'"));
+    return Error(grpc::StatusCode::NOT_FOUND, absl::StrCat("session_id: no open session '", ShownValue(request->session_id()), "'"));
   }
-  if (request->num_samples() < 1 || request->num_samples() > 65536) {
+  if (request->num_samples() < 1 || request->num_samples() > kMaxReferenceAmpSamples) {
     return Error(grpc::StatusCode::INVALID_ARGUMENT,
-                 absl::StrCat("num_samples: ", request->num_samples(), " outside [1, 65536]"));
+                 absl::StrCat("num_samples: ", request->num_samples(), " outside [1, ", kMaxReferenceAmpSamples, "]"));
   }
   const std::shared_ptr<const ReferenceAmpFrames> reference_frames = session->reference_amp();
   const ReferenceAmpFrames& reference = *reference_frames;
   const int64_t n = request->num_samples(), width = int64_t{kAmpHistory} * reference.per_frame();
+  // The response must fit the message limit (4 bytes per float, plus a little framing).
+  const int64_t fit = (options_.max_response_bytes - 4096) / (width * int64_t{sizeof(float)});
+  if (n > fit) {
+    return Error(grpc::StatusCode::INVALID_ARGUMENT,
+                 absl::StrCat("num_samples: ", n, " samples of ", width, " floats exceed the server's message limit of ",
+                              options_.max_response_bytes >> 20, " MiB (--max_message_mb); ask for at most ",
+                              std::max<int64_t>(fit, 0), " per request"));
+  }
   std::vector<float> samples(static_cast<size_t>(n * width));
   std::mt19937_64 rng(request->seed());
   reference.Sample(static_cast<int>(n), rng, samples.data());
@@ -414,8 +425,11 @@ grpc::Status SimulationService::Rollout(grpc::ServerContext* context, const v1::
   if (auto auth = CheckAuth(context); !auth.ok()) return auth;
   absl::StatusOr<std::unique_ptr<PolicyCheckpoint>> policy;
   if (request->has_checkpoint_path()) {
-    if (request->checkpoint_path().empty()) return Error(grpc::StatusCode::INVALID_ARGUMENT, "checkpoint_path: empty");
-    policy = PolicyCheckpoint::LoadFile(request->checkpoint_path());
+    // Only files in the operator's --checkpoint_dir directories, and no larger than an upload.
+    auto bytes = ReadConfinedFile(options_.checkpoint_dirs, request->checkpoint_path(), options_.max_upload_bytes,
+                                  "checkpoint_path");
+    if (!bytes.ok()) return ToGrpcStatus(bytes.status());
+    policy = PolicyCheckpoint::LoadBytes(*bytes);
   } else if (request->has_checkpoint_bytes()) {
     policy = PolicyCheckpoint::LoadBytes(request->checkpoint_bytes());
   } else {
@@ -446,7 +460,7 @@ grpc::Status SimulationService::Rollout(grpc::ServerContext* context, const v1::
   std::vector<int> clip_ids;
   for (int c = 0; c < request->clips_size(); ++c) {
     const int id = motions->Find(request->clips(c));
-    if (id < 0) return Error(grpc::StatusCode::NOT_FOUND, absl::StrCat("clips[", c, "]: unknown clip '", request->clips(c), "'"));
+    if (id < 0) return Error(grpc::StatusCode::NOT_FOUND, absl::StrCat("clips[", c, "]: unknown clip '", ShownValue(request->clips(c)), "'"));
     clip_ids.push_back(id);
   }
   if (clip_ids.empty()) {

@@ -17,11 +17,19 @@
 
 namespace modskill {
 
+// The most reference AMP samples one SampleReferenceAmp may ask for (also bounded by the message
+// limit, see the proto).
+inline constexpr int kMaxReferenceAmpSamples = 65536;
+
 struct ServiceOptions {
   int threads_per_session = 1;
   int max_sessions = 8;
   int max_envs_per_session = 4096;
   int64_t max_upload_bytes = int64_t{64} << 20;
+  int64_t max_response_bytes = int64_t{512} << 20;  // the server's message limit (--max_message_mb)
+  // Directories a Rollout's checkpoint_path may name files in (--checkpoint_dir). None: the
+  // server reads no checkpoint file a client names; clients send checkpoint_bytes.
+  std::vector<std::string> checkpoint_dirs;
   std::string auth_token;  // empty: no authentication
   PhysicsOptions physics;
   // Active skill learning: how each session's clip sampler follows ReportFailures (kUniform: the

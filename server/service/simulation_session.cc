@@ -1,6 +1,7 @@
 #include "server/service/simulation_session.h"
 
 #include "absl/strings/str_cat.h"
+#include "server/core/shown_value.h"
 
 namespace modskill {
 namespace {
@@ -42,7 +43,7 @@ absl::StatusOr<std::vector<GenerationRequest>> SimulationSession::RecordReports(
         continue;
       }
       return absl::NotFoundError(
-          absl::StrCat("failures[", r, "].clip: '", reports[r].clip, "' is not a clip of this session"));
+          absl::StrCat("failures[", r, "].clip: '", ShownValue(reports[r].clip), "' is not a clip of this session"));
     }
     record.frame = reports[r].frame;
     record.part_errors = reports[r].part_errors;

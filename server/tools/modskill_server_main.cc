@@ -5,7 +5,9 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <string>
+#include <vector>
 
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
@@ -55,6 +57,9 @@ ABSL_FLAG(int, max_clip_frames, modskill::ResourceLimits{}.max_clip_frames,
 ABSL_FLAG(int64_t, max_decompressed_bytes, modskill::ResourceLimits{}.max_decompressed_bytes,
           "most bytes an uploaded .npz may inflate to, over all its members");
 ABSL_FLAG(int, max_name_length, modskill::ResourceLimits{}.max_name_length, "most characters in a clip name");
+ABSL_FLAG(std::vector<std::string>, checkpoint_dir, {},
+          "directories (comma-separated) whose policy files a Rollout may name by checkpoint_path; "
+          "none (the default): clients send checkpoint_bytes");
 ABSL_FLAG(std::string, save_generated, "",
           "directory: also write every generated clip that joins a session as <session>/<name>.msclip");
 
@@ -111,6 +116,13 @@ int main(int argc, char** argv) {
   if (absl::GetFlag(FLAGS_generator_timeout_ms) < 1) return fail("--generator_timeout_ms must be >= 1");
   options.service.generator_timeout = absl::Milliseconds(absl::GetFlag(FLAGS_generator_timeout_ms));
   options.service.generated_clip_dir = absl::GetFlag(FLAGS_save_generated);
+  for (const std::string& directory : absl::GetFlag(FLAGS_checkpoint_dir)) {
+    std::error_code error;
+    if (!std::filesystem::is_directory(directory, error)) {
+      return fail(absl::StrCat("--checkpoint_dir: ", directory, " is not a directory"));
+    }
+    options.service.checkpoint_dirs.push_back(directory);
+  }
   if (!absl::GetFlag(FLAGS_auth_token_file).empty()) {
     auto token = ReadFileToString(absl::GetFlag(FLAGS_auth_token_file), 4096);
     if (!token.ok()) return fail(absl::StrCat("--auth_token_file: ", token.status().message()));

@@ -54,7 +54,8 @@ trap 'exit 143' TERM
 PORT=$("$PYTHON" -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1]); s.close()')
 ADDRESS="127.0.0.1:$PORT"
 SERVER_LOG="$WORK_DIR/server.log"
-"$SERVER" --port "$PORT" --bind 127.0.0.1 >"$SERVER_LOG" 2>&1 &
+# The test checkpoint is written to WORK_DIR: the server may read policy files there only.
+"$SERVER" --port "$PORT" --bind 127.0.0.1 --checkpoint_dir "$WORK_DIR" >"$SERVER_LOG" 2>&1 &
 SERVER_PID=$!
 
 # Wait (at most ~10 s) until the server answers a Describe.

@@ -216,7 +216,7 @@ class Client:
           checkpoint: a local checkpoint file; the client reads it and uploads its bytes, so
             this works with remote servers.
           checkpoint_bytes: the archive itself.
-          server_checkpoint: a path the *server* can read.
+          server_checkpoint: a path the *server* reads, in one of its --checkpoint_dir directories.
 
         Args:
           clips: clip names; empty: every clip of the library.
