@@ -173,9 +173,10 @@ v1::ReportFailuresRequest ArmFailures(const std::string& session_id, const std::
 class GenerativeServerTest : public ::testing::Test {
  protected:
   void Start(const std::string& generator = "", absl::Duration timeout = absl::Seconds(5), int cap = 64,
-             const std::string& save_dir = "") {
+             const std::string& save_dir = "", int64_t max_saved = 10000) {
     ServerOptions options;
     options.service.generated_clip_dir = save_dir;
+    options.service.max_saved_generated_clips = max_saved;
     options.service.max_envs_per_session = 64;
     options.service.generation.failures_per_round = 4;
     options.service.generation.variants_per_round = 3;
@@ -286,6 +287,20 @@ TEST_F(GenerativeServerTest, FailedClipGetsVariantsThatEnvsThenTrain) {
   EXPECT_EQ(state->clips(originals).clip_id(), ids[0]);
   EXPECT_EQ(state->clips(originals).failures(), 1);
   EXPECT_EQ(state->clips(originals).provenance().parent(), "deepmimic_walk");
+}
+
+// --max_saved_generated_clips bounds what --save_generated writes; the session still gets them all.
+TEST_F(GenerativeServerTest, SavingGeneratedClipsStopsAtItsLimit) {
+  const std::string save_dir = std::string(MODSKILL_TEST_TMP_DIR) + "/generated_clips_capped";
+  std::filesystem::remove_all(save_dir);
+  Start("", absl::Seconds(5), 64, save_dir, /*max_saved=*/2);
+  FailTheWalk();
+  const std::optional<v1::MotionSetUpdate> update = StepUntilUpdate();
+  ASSERT_TRUE(update.has_value());
+  EXPECT_EQ(update->added_size(), 3);
+  int files = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(save_dir + "/" + session_id_)) files += entry.is_regular_file();
+  EXPECT_EQ(files, 2);
 }
 
 TEST_F(GenerativeServerTest, TheCapEvictsAndReportsOnEvictedClipsAreNotErrors) {

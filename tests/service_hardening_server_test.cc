@@ -171,6 +171,35 @@ TEST(StatusMessageTest, HugeClientStringsAreNotEchoedAndTheChannelSurvives) {
   server->Shutdown(absl::Seconds(1));
 }
 
+TEST(LibraryLimitTest, UploadsBeyondMaxLibraryClipsAreRefusedWholeAndLongNameListsEarly) {
+  ServerOptions options;
+  options.service.max_library_clips = 21;  // the shipped 20 and one more
+  auto server = StartTestServer(options);
+  auto client = ConnectTo(*server);
+  auto walk = ReadFileToString(std::string(MODSKILL_REPO_DIR) + "/data/motions/source/deepmimic/humanoid3d_walk.txt", 1 << 20);
+  ASSERT_TRUE(walk.ok());
+  v1::AddMotionsRequest two;
+  for (const char* name : {"walk_a", "walk_b"}) {
+    v1::MotionUpload* upload = two.add_uploads();
+    upload->set_file_name("humanoid3d_walk.txt");
+    upload->set_name(name);
+    upload->set_data(*walk);
+  }
+  const absl::Status refused = client->AddMotions(two).status();
+  EXPECT_EQ(refused.code(), absl::StatusCode::kResourceExhausted) << refused;
+  EXPECT_THAT(std::string(refused.message()), HasSubstr("--max_library_clips"));
+  two.mutable_uploads()->RemoveLast();
+  EXPECT_TRUE(client->AddMotions(two).ok());
+  // A session config naming more clips than the library may hold is refused before any lookup.
+  v1::SessionConfig config;
+  config.set_num_envs(1);
+  for (int i = 0; i < 22; ++i) config.add_motions("deepmimic_walk");
+  const absl::Status listed = client->OpenSession(config).status();
+  EXPECT_EQ(listed.code(), absl::StatusCode::kInvalidArgument) << listed;
+  EXPECT_THAT(std::string(listed.message()), HasSubstr("motions"));
+  server->Shutdown(absl::Seconds(1));
+}
+
 TEST(SampleReferenceAmpLimitTest, RequestsThatWouldNotFitTheMessageLimitAreRefusedNamingTheField) {
   ServerOptions options;
   options.max_message_bytes = 16 << 20;  // 1807 samples of 2320 floats fit

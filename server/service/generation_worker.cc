@@ -17,11 +17,13 @@ constexpr int kDiscriminatorFrames = 30;
 }  // namespace
 
 GenerationWorker::GenerationWorker(const HumanoidSpec* spec, std::unique_ptr<ExternalMotionGenerator> external,
-                                   const PlausibilityOptions& filter, std::string save_dir, int max_queued)
+                                   const PlausibilityOptions& filter, std::string save_dir, int64_t max_saved,
+                                   int max_queued)
     : spec_(spec),
       external_(std::move(external)),
       filter_(filter),
       save_dir_(std::move(save_dir)),
+      max_saved_(max_saved),
       max_queued_(max_queued) {
   thread_ = std::thread([this] { Run(); });
 }
@@ -131,6 +133,13 @@ void GenerationWorker::RunRound(SimulationSession& session, const GenerationRequ
       session.CommitRound(parent.name, std::move(accepted), counters);
   if (save_dir_.empty()) return;
   for (const auto& clip : added) {
+    if (saved_ >= max_saved_) {
+      if (saved_++ == max_saved_) {
+        LogLine("--save_generated: %lld clips written, the --max_saved_generated_clips limit; saving no more",
+                static_cast<long long>(max_saved_));
+      }
+      break;
+    }
     // Names come from clients (a parent uploaded with AddMotions) and session ids from the
     // server; both are checked and the path confined to --save_generated all the same.
     auto path = [&]() -> absl::StatusOr<std::string> {
@@ -148,6 +157,8 @@ void GenerationWorker::RunRound(SimulationSession& session, const GenerationRequ
     std::filesystem::create_directories(std::filesystem::path(*path).parent_path(), error);
     if (absl::Status status = WriteClipFile(*path, *clip); !status.ok()) {
       LogLine("session %s: could not save '%s': %s", session.id, *path, status.ToString());
+    } else {
+      ++saved_;
     }
   }
 }

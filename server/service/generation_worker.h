@@ -23,9 +23,12 @@ class GenerationWorker {
   // `external` may be null (built-in generator only). `max_queued`: rounds waiting at most;
   // more are dropped (counted per session) rather than piling up behind a slow generator.
   // `save_dir`: when set, every clip that joins a session is also written there as
-  // <session>/<name>.msclip (for inspection and reuse; `modskill-motion inspect` reads them).
+  // <session>/<name>.msclip (for inspection and reuse; `modskill-motion inspect` reads them),
+  // up to `max_saved` files over the server's life (then saving stops, logged once), so that the
+  // disk cannot fill up however long the server runs.
   GenerationWorker(const HumanoidSpec* spec, std::unique_ptr<ExternalMotionGenerator> external,
-                   const PlausibilityOptions& filter, std::string save_dir = "", int max_queued = 256);
+                   const PlausibilityOptions& filter, std::string save_dir = "", int64_t max_saved = 10000,
+                   int max_queued = 256);
   ~GenerationWorker();  // finishes the round in progress, drops the rest
   GenerationWorker(const GenerationWorker&) = delete;
   GenerationWorker& operator=(const GenerationWorker&) = delete;
@@ -47,6 +50,8 @@ class GenerationWorker {
   const std::unique_ptr<ExternalMotionGenerator> external_;
   const PlausibilityOptions filter_;
   const std::string save_dir_;
+  const int64_t max_saved_;
+  int64_t saved_ = 0;  // only the worker's thread touches it
   const int max_queued_;
   absl::Mutex mutex_;
   std::deque<Job> queue_ ABSL_GUARDED_BY(mutex_);

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "absl/status/status.h"
+#include "absl/strings/str_cat.h"
 #include "absl/synchronization/mutex.h"
 #include "server/core/motion_library.h"
 
@@ -21,9 +22,14 @@ class MotionStore {
     return current_;
   }
 
-  // All or nothing: a duplicate name rejects the whole batch.
-  absl::Status Add(std::vector<MotionClip> clips) {
+  // All or nothing: a duplicate name, or more clips in all than `max_clips`, rejects the batch.
+  absl::Status Add(std::vector<MotionClip> clips, int max_clips) {
     absl::MutexLock lock(&mutex_);
+    if (current_->size() + static_cast<int64_t>(clips.size()) > max_clips) {
+      return absl::ResourceExhaustedError(absl::StrCat("uploads: ", clips.size(), " clips would take the library past ",
+                                                       max_clips, " (--max_library_clips; it holds ",
+                                                       current_->size(), ")"));
+    }
     auto next = std::make_shared<MotionLibrary>(*current_);
     for (MotionClip& clip : clips) {
       if (auto status = next->Add(std::move(clip)); !status.ok()) return status;

@@ -1,7 +1,7 @@
 // A trained policy as shipped: a TorchScript module whose forward maps an observation batch
 // [N, obs_size] to deterministic actions [N, action_size], with the env spec it was trained on
-// stored beside it in the archive (extra file "modskill/env_spec.json"). The server runs it
-// for rollouts; Python users can torch.jit.load it.
+// stored beside it in the archive (extra file "modskill/env_spec.json", PolicySpec in
+// policy_spec.h). The server runs it for rollouts; Python users can torch.jit.load it.
 #ifndef MODSKILL_SERVER_SERVICE_POLICY_CHECKPOINT_H_
 #define MODSKILL_SERVER_SERVICE_POLICY_CHECKPOINT_H_
 
@@ -12,34 +12,13 @@
 
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
-#include "server/core/action_mapping.h"
-#include "server/core/env_spec.h"
+#include "server/service/policy_spec.h"
 
 namespace torch::jit {
 struct Module;
 }  // namespace torch::jit
 
 namespace modskill {
-
-inline constexpr char kCheckpointSpecFile[] = "modskill/env_spec.json";
-
-// The part of the env spec a policy depends on.
-struct PolicySpec {
-  std::string part_layout;
-  int obs_size = 0;
-  int action_size = 0;
-  std::vector<std::string> joint_names;  // action order
-  double control_dt = 0;
-  // The action mapping it was trained with; checkpoints from before action modes existed
-  // were trained in absolute mode.
-  ActionMapping action;
-
-  static PolicySpec FromEnvSpec(const EnvSpec& spec);
-  std::string ToJson() const;
-  static absl::StatusOr<PolicySpec> FromJson(absl::string_view json);
-  // FAILED_PRECONDITION naming the first difference.
-  absl::Status CheckCompatible(const EnvSpec& server) const;
-};
 
 // Writes a TorchScript checkpoint of the affine policy actions = clamp(obs W^T + b, -1, 1)
 // (W: [action_size, obs_size], b: [action_size], row-major; empty W means zeros). A baseline

@@ -64,6 +64,12 @@ absl::StatusOr<std::unique_ptr<RunningServer>> StartServer(const ServerOptions& 
   running->service_ = *std::move(service);
   running->server_ = builder.BuildAndStart();
   if (running->server_ == nullptr || running->port_ == 0) {
+    // gRPC reads the PEM pair only here, and says why only in its log: name the likely cause.
+    if (!options.tls_cert_file.empty()) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "cannot listen on ", address, " with TLS: tls_cert ", options.tls_cert_file, " and tls_key ",
+          options.tls_key_file, " must be a PEM certificate chain and its matching private key (or the port is taken)"));
+    }
     return absl::UnavailableError(absl::StrCat("cannot listen on ", address));
   }
   running->server_->GetHealthCheckService()->SetServingStatus(true);

@@ -15,6 +15,7 @@
 #include "server/service/policy_checkpoint.h"
 #include "server/service/proto_conversions.h"
 #include "server/service/server_log.h"
+#include "server/service/session_config_validation.h"
 #include "server/core/shown_value.h"
 #include "server/service/status_text.h"
 #include "server/service/tensor_codec.h"
@@ -30,60 +31,6 @@ bool SameSecret(const std::string& a, const std::string& b) {
   unsigned char diff = 0;
   for (size_t i = 0; i < a.size(); ++i) diff |= static_cast<unsigned char>(a[i] ^ b[i]);
   return diff == 0;
-}
-
-absl::StatusOr<TerminationMode> ToTermination(v1::TerminationMode mode, v1::TerminationMode default_mode) {
-  if (mode == v1::TERMINATION_UNSPECIFIED) mode = default_mode;
-  switch (mode) {
-    case v1::TRAINING:
-      return TerminationMode::kTraining;
-    case v1::EVALUATION:
-      return TerminationMode::kEvaluation;
-    case v1::NONE:
-      return TerminationMode::kNone;
-    default:
-      return absl::InvalidArgumentError(absl::StrCat("termination: unknown value ", static_cast<int>(mode)));
-  }
-}
-
-absl::StatusOr<double> ToTerminationDistance(float distance, TerminationMode mode) {
-  if (distance == 0) return mode == TerminationMode::kEvaluation ? 0.5 : 0.25;  // the mode's default
-  if (absl::Status status = ValidateTerminationDistance(distance); !status.ok()) return status;
-  return distance;
-}
-
-absl::StatusOr<ActionMapping> ToActionMapping(v1::ActionMode mode, float residual_scale) {
-  ActionMapping mapping;
-  switch (mode) {
-    case v1::ACTION_MODE_UNSPECIFIED:
-    case v1::ABSOLUTE:
-      mapping.mode = ActionMode::kAbsolute;
-      break;
-    case v1::RESIDUAL:
-      mapping.mode = ActionMode::kResidual;
-      break;
-    default:
-      return absl::InvalidArgumentError(absl::StrCat("action_mode: unknown value ", static_cast<int>(mode)));
-  }
-  if (mapping.mode == ActionMode::kAbsolute) {
-    if (residual_scale != 0) return absl::InvalidArgumentError("residual_scale: set, but action_mode is not RESIDUAL");
-    return mapping;
-  }
-  if (residual_scale != 0) mapping.residual_scale = residual_scale;  // 0: the default
-  if (absl::Status status = mapping.Validate(); !status.ok()) return status;
-  return mapping;
-}
-
-absl::StatusOr<TerminationBodies> ToTerminationBodies(v1::TerminationBodies bodies) {
-  switch (bodies) {
-    case v1::TERMINATION_BODIES_UNSPECIFIED:
-    case v1::ALL:
-      return TerminationBodies::kAll;
-    case v1::NO_FEET:
-      return TerminationBodies::kNoFeet;
-    default:
-      return absl::InvalidArgumentError(absl::StrCat("termination_bodies: unknown value ", static_cast<int>(bodies)));
-  }
 }
 
 v1::ActionMode ToProto(ActionMode mode) { return mode == ActionMode::kResidual ? v1::RESIDUAL : v1::ABSOLUTE; }
@@ -152,6 +99,10 @@ void ToProto(const std::vector<std::string>& part_names, const PendingMotionSet&
 
 absl::StatusOr<std::unique_ptr<SimulationService>> SimulationService::Create(
     const ServiceOptions& options, std::shared_ptr<const MotionLibrary> motions) {
+  if (motions != nullptr && motions->size() > options.max_library_clips) {
+    return absl::InvalidArgumentError(absl::StrCat("--max_library_clips: ", options.max_library_clips,
+                                                   ", but the library already holds ", motions->size(), " clips"));
+  }
   if (motions == nullptr || motions->size() == 0) return absl::InvalidArgumentError("motions: the library is empty");
   if (absl::Status status = ValidateSamplingParameters(options.sampling_floor, kDefaultSamplingDecay); !status.ok()) {
     return status;
@@ -176,7 +127,7 @@ absl::StatusOr<std::unique_ptr<SimulationService>> SimulationService::Create(
   }
   service->generation_worker_ =
       std::make_unique<GenerationWorker>(service->skeleton_.get(), std::move(external), options.plausibility,
-                                         options.generated_clip_dir);
+                                         options.generated_clip_dir, options.max_saved_generated_clips);
   return service;
 }
 
@@ -193,9 +144,7 @@ grpc::Status SimulationService::CheckAuth(const grpc::ServerContext* context) co
 }
 
 absl::StatusOr<PartLayout> SimulationService::Layout(const std::string& name) const {
-  auto layout = layouts_->Get(name.empty() ? layouts_->default_name() : name);
-  if (!layout.ok()) return absl::NotFoundError(layout.status().message());
-  return layout;
+  return FindLayout(*layouts_, name);
 }
 
 grpc::Status SimulationService::Describe(grpc::ServerContext* context, const v1::DescribeRequest* request,
@@ -221,33 +170,16 @@ grpc::Status SimulationService::Simulate(grpc::ServerContext* context,
     return Error(grpc::StatusCode::INVALID_ARGUMENT, "config: the first message must carry the session config");
   }
   const v1::SessionConfig& config = request.config();
-  if (config.num_envs() < 1) {
-    return Error(grpc::StatusCode::INVALID_ARGUMENT, absl::StrCat("num_envs: ", config.num_envs(), " must be >= 1"));
-  }
-  if (config.num_envs() > options_.max_envs_per_session) {
-    return Error(grpc::StatusCode::RESOURCE_EXHAUSTED,
-                 absl::StrCat("num_envs: ", config.num_envs(), " exceeds --max_envs_per_session=",
-                              options_.max_envs_per_session));
-  }
-  if (config.max_episode_steps() < 0) {
-    return Error(grpc::StatusCode::INVALID_ARGUMENT, "max_episode_steps: must be >= 0");
-  }
-  auto layout = Layout(config.part_layout());
-  if (!layout.ok()) return ToGrpcStatus(layout.status());
-  auto termination = ToTermination(config.termination(), v1::TRAINING);
-  if (!termination.ok()) return ToGrpcStatus(termination.status());
-  auto distance = ToTerminationDistance(config.termination_distance(), *termination);
-  if (!distance.ok()) return ToGrpcStatus(distance.status());
-  auto action_mapping = ToActionMapping(config.action_mode(), config.residual_scale());
-  if (!action_mapping.ok()) return ToGrpcStatus(action_mapping.status());
-  auto termination_bodies = ToTerminationBodies(config.termination_bodies());
-  if (!termination_bodies.ok()) return ToGrpcStatus(termination_bodies.status());
-  int amp_frames = kAmpHistory;
-  if (config.amp_obs() == v1::NEWEST) amp_frames = 1;
-  if (config.amp_obs() == v1::OMIT) amp_frames = 0;
-  if (!v1::AmpObs_IsValid(config.amp_obs())) return Error(grpc::StatusCode::INVALID_ARGUMENT, "amp_obs: unknown value");
+  auto settings = ParseSessionConfig(config, options_.max_envs_per_session, *layouts_);
+  if (!settings.ok()) return ToGrpcStatus(settings.status());
+  const int amp_frames = settings->amp_frames;
 
   std::shared_ptr<const MotionLibrary> motions = motions_.Snapshot();
+  if (config.motions_size() > options_.max_library_clips) {
+    return Error(grpc::StatusCode::INVALID_ARGUMENT,
+                 absl::StrCat("motions: ", config.motions_size(), " names, more than the library may hold (",
+                              options_.max_library_clips, ", --max_library_clips)"));
+  }
   if (config.motions_size() > 0) {
     auto subset = motions->Subset({config.motions().begin(), config.motions().end()});
     if (!subset.ok()) return ToGrpcStatus(subset.status());
@@ -257,15 +189,11 @@ grpc::Status SimulationService::Simulate(grpc::ServerContext* context,
   if (!session_id.ok()) return ToGrpcStatus(session_id.status());
 
   EnvBatchConfig batch_config;
-  batch_config.num_envs = config.num_envs();
+  batch_config.num_envs = settings->num_envs;
   batch_config.num_threads = options_.threads_per_session;
-  batch_config.seed = config.seed();
-  batch_config.env.termination = *termination;
-  batch_config.env.termination_distance = *distance;
-  batch_config.env.termination_bodies = *termination_bodies;
-  batch_config.env.action = *action_mapping;
-  batch_config.env.max_episode_steps = config.max_episode_steps();
-  auto batch = EnvBatch::Create(batch_config, humanoid_, *layout, motions);
+  batch_config.seed = settings->seed;
+  batch_config.env = settings->env;
+  auto batch = EnvBatch::Create(batch_config, humanoid_, settings->layout, motions);
   if (!batch.ok()) {
     registry_.Release();
     return ToGrpcStatus(batch.status());
@@ -276,7 +204,7 @@ grpc::Status SimulationService::Simulate(grpc::ServerContext* context,
   registry_.Register(session);
   EnvBatch& envs = *session->batch;
   LogLine("session %s opened by %s: %d envs, %d clips, layout %s", session->id, session->peer, envs.num_envs(),
-          motions->size(), layout->name);
+          motions->size(), settings->layout.name);
 
   // The same messages are reused for every step so that their buffers keep their capacity.
   v1::SimulateResponse response;
@@ -577,7 +505,9 @@ grpc::Status SimulationService::AddMotions(grpc::ServerContext* context, const v
   std::filesystem::remove_all(dir, error);
   if (!result.ok()) return result;
   std::vector<MotionClip> added = clips;
-  if (absl::Status status = motions_.Add(std::move(clips)); !status.ok()) return ToGrpcStatus(status);
+  if (absl::Status status = motions_.Add(std::move(clips), options_.max_library_clips); !status.ok()) {
+    return ToGrpcStatus(status);
+  }
   for (const MotionClip& clip : added) ToProto(clip, response->add_added());
   LogLine("%d clips added by %s", static_cast<int>(added.size()), context->peer());
   return grpc::Status::OK;

@@ -43,6 +43,10 @@ struct ServiceOptions {
   std::string generator_address;  // external MotionGenerator host:port; empty: built-in only
   absl::Duration generator_timeout = absl::Seconds(10);
   std::string generated_clip_dir;  // also write every generated clip that joins a session here
+  int64_t max_saved_generated_clips = 10000;  // files written there over the server's life
+  // Clips the library may hold, shipped and uploaded (AddMotions beyond it: RESOURCE_EXHAUSTED).
+  // A session holds at most its library clips plus --max_generated_clips variants.
+  int max_library_clips = 10000;
 };
 
 class SimulationService final : public v1::Simulation::Service {

@@ -60,6 +60,8 @@ ABSL_FLAG(int, max_name_length, modskill::ResourceLimits{}.max_name_length, "mos
 ABSL_FLAG(std::vector<std::string>, checkpoint_dir, {},
           "directories (comma-separated) whose policy files a Rollout may name by checkpoint_path; "
           "none (the default): clients send checkpoint_bytes");
+ABSL_FLAG(int64_t, max_saved_generated_clips, 10000, "clip files --save_generated writes over the server's life");
+ABSL_FLAG(int, max_library_clips, 10000, "clips the library may hold, shipped and uploaded with AddMotions");
 ABSL_FLAG(std::string, save_generated, "",
           "directory: also write every generated clip that joins a session as <session>/<name>.msclip");
 
@@ -116,6 +118,10 @@ int main(int argc, char** argv) {
   if (absl::GetFlag(FLAGS_generator_timeout_ms) < 1) return fail("--generator_timeout_ms must be >= 1");
   options.service.generator_timeout = absl::Milliseconds(absl::GetFlag(FLAGS_generator_timeout_ms));
   options.service.generated_clip_dir = absl::GetFlag(FLAGS_save_generated);
+  options.service.max_saved_generated_clips = absl::GetFlag(FLAGS_max_saved_generated_clips);
+  options.service.max_library_clips = absl::GetFlag(FLAGS_max_library_clips);
+  if (options.service.max_saved_generated_clips < 0) return fail("--max_saved_generated_clips must be >= 0");
+  if (options.service.max_library_clips < 1) return fail("--max_library_clips must be >= 1");
   for (const std::string& directory : absl::GetFlag(FLAGS_checkpoint_dir)) {
     std::error_code error;
     if (!std::filesystem::is_directory(directory, error)) {

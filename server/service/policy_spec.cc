@@ -1,0 +1,101 @@
+#include "server/service/policy_spec.h"
+
+#include <cmath>
+#include <cstdint>
+
+#include <nlohmann/json.hpp>
+
+#include "absl/strings/str_cat.h"
+#include "server/core/shown_value.h"
+
+namespace modskill {
+
+PolicySpec PolicySpec::FromEnvSpec(const EnvSpec& spec) {
+  PolicySpec policy;
+  policy.part_layout = spec.layout.name;
+  policy.obs_size = spec.obs_size;
+  policy.action_size = spec.action_size;
+  policy.joint_names = spec.joint_names;
+  policy.control_dt = spec.control_dt;
+  return policy;
+}
+
+std::string PolicySpec::ToJson() const {
+  nlohmann::json json;
+  json["part_layout"] = part_layout;
+  json["obs_size"] = obs_size;
+  json["action_size"] = action_size;
+  json["joint_names"] = joint_names;
+  json["control_dt"] = control_dt;
+  json["action_mode"] = ActionModeName(action.mode);
+  json["residual_scale"] = action.residual_scale;
+  return json.dump(1);
+}
+
+absl::StatusOr<PolicySpec> PolicySpec::FromJson(absl::string_view text) {
+  nlohmann::json json = nlohmann::json::parse(text.begin(), text.end(), nullptr, /*allow_exceptions=*/false);
+  if (json.is_discarded() || !json.is_object()) {
+    return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": not a JSON object"));
+  }
+  PolicySpec spec;
+  // Sizes are read as they are written, not cast: 2^40 must not become 0.
+  auto size = [&](const char* key) -> absl::StatusOr<int> {
+    const nlohmann::json& value = json.at(key);
+    if (!value.is_number_integer() || value.get<int64_t>() < 1 || value.get<int64_t>() > kMaxPolicyVectorSize) {
+      return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": ", key, ": ", value.dump().substr(0, 32),
+                                                     " is not an integer in [1, ", kMaxPolicyVectorSize, "]"));
+    }
+    return static_cast<int>(value.get<int64_t>());
+  };
+  try {
+    spec.part_layout = json.at("part_layout").get<std::string>();
+    if (spec.part_layout.size() > kMaxShownValueBytes) {
+      return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": part_layout: ", spec.part_layout.size(),
+                                                     " characters, longer than any layout name"));
+    }
+    auto obs_size = size("obs_size");
+    if (!obs_size.ok()) return obs_size.status();
+    spec.obs_size = *obs_size;
+    auto action_size = size("action_size");
+    if (!action_size.ok()) return action_size.status();
+    spec.action_size = *action_size;
+    spec.joint_names = json.at("joint_names").get<std::vector<std::string>>();
+    if (static_cast<int64_t>(spec.joint_names.size()) > kMaxPolicyVectorSize) {
+      return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": joint_names: too many"));
+    }
+    spec.control_dt = json.at("control_dt").get<double>();
+    if (!(spec.control_dt > 0 && spec.control_dt < 10)) {
+      return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": control_dt: ", spec.control_dt,
+                                                     " is not in (0, 10) s"));
+    }
+    if (json.contains("action_mode")) {
+      auto mode = ParseActionMode(json.at("action_mode").get<std::string>());
+      if (!mode.ok()) return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": action_mode: ", mode.status().message()));
+      spec.action.mode = *mode;
+    }
+    if (json.contains("residual_scale")) spec.action.residual_scale = json.at("residual_scale").get<double>();
+  } catch (const nlohmann::json::exception& e) {
+    return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": ", ShownValue(e.what())));
+  }
+  if (absl::Status status = spec.action.Validate(); !status.ok()) {
+    return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": ", status.message()));
+  }
+  return spec;
+}
+
+absl::Status PolicySpec::CheckCompatible(const EnvSpec& server) const {
+  auto mismatch = [](absl::string_view field, const auto& mine, const auto& theirs) {
+    return absl::FailedPreconditionError(absl::StrCat("checkpoint: trained with ", field, " = ", mine,
+                                                      ", this server has ", theirs));
+  };
+  if (part_layout != server.layout.name) return mismatch("part_layout", part_layout, server.layout.name);
+  if (obs_size != server.obs_size) return mismatch("obs_size", obs_size, server.obs_size);
+  if (action_size != server.action_size) return mismatch("action_size", action_size, server.action_size);
+  if (std::abs(control_dt - server.control_dt) > 1e-9) return mismatch("control_dt", control_dt, server.control_dt);
+  if (joint_names != server.joint_names) {
+    return absl::FailedPreconditionError("checkpoint: trained with another joint order (joint_names differ)");
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace modskill

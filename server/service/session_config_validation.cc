@@ -1,0 +1,105 @@
+#include "server/service/session_config_validation.h"
+
+#include "absl/status/status.h"
+#include "absl/strings/str_cat.h"
+#include "server/core/env_batch.h"
+#include "server/core/env_spec.h"
+
+namespace modskill {
+
+absl::StatusOr<PartLayout> FindLayout(const PartLayoutCatalog& layouts, const std::string& name) {
+  auto layout = layouts.Get(name.empty() ? layouts.default_name() : name);
+  if (!layout.ok()) return absl::NotFoundError(layout.status().message());
+  return layout;
+}
+
+absl::StatusOr<TerminationMode> ToTermination(v1::TerminationMode mode, v1::TerminationMode default_mode) {
+  if (mode == v1::TERMINATION_UNSPECIFIED) mode = default_mode;
+  switch (mode) {
+    case v1::TRAINING:
+      return TerminationMode::kTraining;
+    case v1::EVALUATION:
+      return TerminationMode::kEvaluation;
+    case v1::NONE:
+      return TerminationMode::kNone;
+    default:
+      return absl::InvalidArgumentError(absl::StrCat("termination: unknown value ", static_cast<int>(mode)));
+  }
+}
+
+absl::StatusOr<double> ToTerminationDistance(float distance, TerminationMode mode) {
+  if (distance == 0) return mode == TerminationMode::kEvaluation ? 0.5 : 0.25;  // the mode's default
+  if (absl::Status status = ValidateTerminationDistance(distance); !status.ok()) return status;
+  return distance;
+}
+
+absl::StatusOr<ActionMapping> ToActionMapping(v1::ActionMode mode, float residual_scale) {
+  ActionMapping mapping;
+  switch (mode) {
+    case v1::ACTION_MODE_UNSPECIFIED:
+    case v1::ABSOLUTE:
+      mapping.mode = ActionMode::kAbsolute;
+      break;
+    case v1::RESIDUAL:
+      mapping.mode = ActionMode::kResidual;
+      break;
+    default:
+      return absl::InvalidArgumentError(absl::StrCat("action_mode: unknown value ", static_cast<int>(mode)));
+  }
+  if (mapping.mode == ActionMode::kAbsolute) {
+    if (residual_scale != 0) return absl::InvalidArgumentError("residual_scale: set, but action_mode is not RESIDUAL");
+    return mapping;
+  }
+  if (residual_scale != 0) mapping.residual_scale = residual_scale;  // 0: the default
+  if (absl::Status status = mapping.Validate(); !status.ok()) return status;
+  return mapping;
+}
+
+absl::StatusOr<TerminationBodies> ToTerminationBodies(v1::TerminationBodies bodies) {
+  switch (bodies) {
+    case v1::TERMINATION_BODIES_UNSPECIFIED:
+    case v1::ALL:
+      return TerminationBodies::kAll;
+    case v1::NO_FEET:
+      return TerminationBodies::kNoFeet;
+    default:
+      return absl::InvalidArgumentError(absl::StrCat("termination_bodies: unknown value ", static_cast<int>(bodies)));
+  }
+}
+
+absl::StatusOr<SessionSettings> ParseSessionConfig(const v1::SessionConfig& config, int max_envs_per_session,
+                                                   const PartLayoutCatalog& layouts) {
+  SessionSettings settings;
+  if (config.num_envs() < 1) {
+    return absl::InvalidArgumentError(absl::StrCat("num_envs: ", config.num_envs(), " must be >= 1"));
+  }
+  if (config.num_envs() > max_envs_per_session) {
+    return absl::ResourceExhaustedError(absl::StrCat("num_envs: ", config.num_envs(),
+                                                     " exceeds --max_envs_per_session=", max_envs_per_session));
+  }
+  if (config.max_episode_steps() < 0) return absl::InvalidArgumentError("max_episode_steps: must be >= 0");
+  auto layout = FindLayout(layouts, config.part_layout());
+  if (!layout.ok()) return layout.status();
+  auto termination = ToTermination(config.termination(), v1::TRAINING);
+  if (!termination.ok()) return termination.status();
+  auto distance = ToTerminationDistance(config.termination_distance(), *termination);
+  if (!distance.ok()) return distance.status();
+  auto action_mapping = ToActionMapping(config.action_mode(), config.residual_scale());
+  if (!action_mapping.ok()) return action_mapping.status();
+  auto termination_bodies = ToTerminationBodies(config.termination_bodies());
+  if (!termination_bodies.ok()) return termination_bodies.status();
+  if (!v1::AmpObs_IsValid(config.amp_obs())) return absl::InvalidArgumentError("amp_obs: unknown value");
+  settings.amp_frames = config.amp_obs() == v1::NEWEST ? 1 : config.amp_obs() == v1::OMIT ? 0 : kAmpHistory;
+
+  settings.num_envs = config.num_envs();
+  settings.seed = config.seed();
+  settings.layout = *std::move(layout);
+  settings.env.termination = *termination;
+  settings.env.termination_distance = *distance;
+  settings.env.termination_bodies = *termination_bodies;
+  settings.env.action = *action_mapping;
+  settings.env.max_episode_steps = config.max_episode_steps();
+  return settings;
+}
+
+}  // namespace modskill

@@ -1,0 +1,48 @@
+// A Simulate stream's SessionConfig -> what the session runs with, every field checked before
+// anything is allocated. The service and fuzz/simulate_request_fuzzer.cc share it, so the fuzzer
+// sees exactly the checks a client's bytes meet.
+#ifndef MODSKILL_SERVER_SERVICE_SESSION_CONFIG_VALIDATION_H_
+#define MODSKILL_SERVER_SERVICE_SESSION_CONFIG_VALIDATION_H_
+
+#include <cstdint>
+#include <string>
+
+#include "absl/status/statusor.h"
+#include "modskill/v1/modskill.pb.h"
+#include "server/core/action_mapping.h"
+#include "server/core/part_layout.h"
+#include "server/core/tracking_env.h"
+
+namespace modskill {
+
+// A session config, checked.
+struct SessionSettings {
+  int num_envs = 0;
+  uint64_t seed = 0;
+  PartLayout layout;
+  // termination, termination_distance, termination_bodies, action, max_episode_steps.
+  TrackingEnvConfig env;
+  int amp_frames = 0;  // AMP frames per step result: kAmpHistory, 1 or 0
+};
+
+// The checks in the order the service reports them: num_envs in [1, max_envs_per_session]
+// (above: RESOURCE_EXHAUSTED), max_episode_steps >= 0, the layout (NOT_FOUND), termination,
+// its distance, action mode and residual scale, termination bodies, amp_obs (INVALID_ARGUMENT).
+// The clip names in config.motions are left to the library.
+absl::StatusOr<SessionSettings> ParseSessionConfig(const v1::SessionConfig& config, int max_envs_per_session,
+                                                   const PartLayoutCatalog& layouts);
+
+// The named layout, or the catalog's default for ""; NOT_FOUND for an unknown name.
+absl::StatusOr<PartLayout> FindLayout(const PartLayoutCatalog& layouts, const std::string& name);
+
+// TERMINATION_UNSPECIFIED means `default_mode` (TRAINING for sessions, EVALUATION for rollouts).
+absl::StatusOr<TerminationMode> ToTermination(v1::TerminationMode mode, v1::TerminationMode default_mode);
+// 0 means the mode's default (0.5 m in evaluation, 0.25 m otherwise).
+absl::StatusOr<double> ToTerminationDistance(float distance, TerminationMode mode);
+// residual_scale must be 0 outside RESIDUAL; 0 in RESIDUAL means the default scale.
+absl::StatusOr<ActionMapping> ToActionMapping(v1::ActionMode mode, float residual_scale);
+absl::StatusOr<TerminationBodies> ToTerminationBodies(v1::TerminationBodies bodies);
+
+}  // namespace modskill
+
+#endif  // MODSKILL_SERVER_SERVICE_SESSION_CONFIG_VALIDATION_H_
