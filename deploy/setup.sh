@@ -12,6 +12,7 @@ PACKAGES=(
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler libtorch-dev
   libopenblas0-pthread
   libgtest-dev libgmock-dev
+  openssl  # tests/tls_server_test makes a throwaway CA and certificates with it
   python3-grpcio python3-numpy python3-matplotlib
 )
 
