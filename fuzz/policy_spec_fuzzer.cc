@@ -1,0 +1,58 @@
+// libFuzzer target: a policy checkpoint's metadata, the JSON its archive carries as
+// modskill/env_spec.json (PolicySpec::FromJson, server/service/policy_spec.cc), then what
+// Rollout does with a spec that parses: look up its layout and check it against that layout's
+// env spec. The zip container around the JSON is torch's reader (torch::jit::load), not ours,
+// and stays out of the torch-free fuzz build.
+//
+// A spec that parses must keep the bounds FromJson promises and survive ToJson -> FromJson.
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+#include "fuzz/fuzz_service.h"
+#include "server/service/policy_spec.h"
+
+namespace modskill::fuzz {
+namespace {
+
+void FuzzPolicySpec(const uint8_t* data, size_t size) {
+  auto spec = PolicySpec::FromJson(absl::string_view(reinterpret_cast<const char*>(data), size));
+  if (!spec.ok()) {
+    Check(spec.status().code() == absl::StatusCode::kInvalidArgument, "a bad spec is INVALID_ARGUMENT");
+    return;
+  }
+  Check(spec->obs_size >= 1 && spec->obs_size <= kMaxPolicyVectorSize, "obs_size in bounds");
+  Check(spec->action_size >= 1 && spec->action_size <= kMaxPolicyVectorSize, "action_size in bounds");
+  Check(spec->joint_names.size() <= static_cast<size_t>(kMaxPolicyVectorSize), "joint_names bounded");
+  Check(spec->control_dt > 0 && spec->control_dt < 10, "control_dt in (0, 10)");
+  Check(spec->action.Validate().ok(), "valid action mapping");
+
+  auto again = PolicySpec::FromJson(spec->ToJson());
+  Check(again.ok(), "ToJson output parses");
+  Check(again->part_layout == spec->part_layout && again->obs_size == spec->obs_size &&
+            again->action_size == spec->action_size && again->joint_names == spec->joint_names &&
+            again->control_dt == spec->control_dt && again->action.mode == spec->action.mode &&
+            again->action.residual_scale == spec->action.residual_scale,
+        "ToJson -> FromJson is the identity");
+
+  const ServiceFixture& fixture = Fixture();
+  auto env_spec = fixture.env_specs.find(spec->part_layout);
+  if (env_spec == fixture.env_specs.end()) return;  // Rollout: FAILED_PRECONDITION, unknown layout
+  const absl::Status compatible = spec->CheckCompatible(env_spec->second);
+  Check(compatible.ok() || compatible.code() == absl::StatusCode::kFailedPrecondition,
+        "an incompatible spec is FAILED_PRECONDITION");
+}
+
+}  // namespace
+}  // namespace modskill::fuzz
+
+extern "C" int LLVMFuzzerInitialize(int*, char***) {
+  modskill::fuzz::Fixture();
+  return 0;
+}
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  modskill::fuzz::FuzzPolicySpec(data, size);
+  return 0;
+}
