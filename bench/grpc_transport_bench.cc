@@ -1,4 +1,4 @@
-// Transport cost (DESIGN.md section 5: a learner over loopback gRPC gets >= 0.9 x the steps/s
+// Transport cost (docs/DESIGN.md section 5: a learner over loopback gRPC gets >= 0.9 x the steps/s
 // of the same envs in-process).
 //
 // For 64, 256 and 1024 envs and 1 and 2 server threads: a learner-like loop (send zero actions,

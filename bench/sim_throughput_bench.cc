@@ -1,4 +1,4 @@
-// Simulation throughput against its physical limit (DESIGN.md section 5).
+// Simulation throughput against its physical limit (docs/DESIGN.md section 5).
 //
 // The limit: raw mj_step calls per second on one thread for the generated humanoid, driven
 // through the same reference-tracking workload as the envs (PD targets = the reference's next

@@ -18,6 +18,7 @@
 #include "absl/strings/str_join.h"
 #include "absl/strings/str_split.h"
 #include "server/core/atomic_file.h"
+#include "tensorboard/event.pb.h"
 
 namespace modskill::learner {
 namespace {
@@ -33,38 +34,8 @@ constexpr std::array<uint32_t, 256> MakeCrc32cTable() {
 }
 constexpr std::array<uint32_t, 256> kCrc32cTable = MakeCrc32cTable();
 
-// --- Protobuf wire format, just the pieces tensorflow.Event needs. ---
-enum WireType : uint32_t { kVarint = 0, kFixed64 = 1, kLengthDelimited = 2, kFixed32 = 5 };
-
-void AppendVarint(uint64_t value, std::string* out) {
-  while (value >= 0x80) {
-    out->push_back(static_cast<char>((value & 0x7F) | 0x80));
-    value >>= 7;
-  }
-  out->push_back(static_cast<char>(value));
-}
-void AppendKey(uint32_t field, WireType type, std::string* out) {
-  AppendVarint((field << 3) | type, out);
-}
 void AppendLittleEndian(uint64_t bits, int num_bytes, std::string* out) {
   for (int i = 0; i < num_bytes; ++i) out->push_back(static_cast<char>((bits >> (8 * i)) & 0xFF));
-}
-void AppendDouble(uint32_t field, double value, std::string* out) {
-  uint64_t bits;
-  std::memcpy(&bits, &value, sizeof(bits));
-  AppendKey(field, kFixed64, out);
-  AppendLittleEndian(bits, 8, out);
-}
-void AppendFloat(uint32_t field, float value, std::string* out) {
-  uint32_t bits;
-  std::memcpy(&bits, &value, sizeof(bits));
-  AppendKey(field, kFixed32, out);
-  AppendLittleEndian(bits, 4, out);
-}
-void AppendBytes(uint32_t field, absl::string_view bytes, std::string* out) {
-  AppendKey(field, kLengthDelimited, out);
-  AppendVarint(bytes.size(), out);
-  out->append(bytes.data(), bytes.size());
 }
 
 double WallTimeSeconds() {
@@ -122,10 +93,10 @@ absl::StatusOr<std::unique_ptr<TensorBoardWriter>> TensorBoardWriter::Open(
   if (file == nullptr) return IoError(absl::StrCat("open ", path));
 
   std::unique_ptr<TensorBoardWriter> writer(new TensorBoardWriter(path, file));
-  std::string event;
-  AppendDouble(1, WallTimeSeconds(), &event);  // wall_time
-  AppendBytes(3, "brain.Event:2", &event);     // file_version
-  if (absl::Status status = writer->WriteRecord(event); !status.ok()) return status;
+  tensorflow::Event event;
+  event.set_wall_time(WallTimeSeconds());
+  event.set_file_version("brain.Event:2");
+  if (absl::Status status = writer->WriteRecord(event.SerializeAsString()); !status.ok()) return status;
   if (absl::Status status = writer->Flush(); !status.ok()) return status;
   return writer;
 }
@@ -133,17 +104,13 @@ absl::StatusOr<std::unique_ptr<TensorBoardWriter>> TensorBoardWriter::Open(
 TensorBoardWriter::~TensorBoardWriter() { std::fclose(file_); }
 
 absl::Status TensorBoardWriter::AddScalar(const std::string& tag, int64_t step, double value) {
-  std::string summary_value;
-  AppendBytes(1, tag, &summary_value);                           // Value.tag
-  AppendFloat(2, static_cast<float>(value), &summary_value);     // Value.simple_value
-  std::string summary;
-  AppendBytes(1, summary_value, &summary);                       // Summary.value
-  std::string event;
-  AppendDouble(1, WallTimeSeconds(), &event);                    // Event.wall_time
-  AppendKey(2, kVarint, &event);                                 // Event.step
-  AppendVarint(static_cast<uint64_t>(step), &event);
-  AppendBytes(5, summary, &event);                               // Event.summary
-  return WriteRecord(event);
+  tensorflow::Event event;
+  event.set_wall_time(WallTimeSeconds());
+  event.set_step(step);
+  tensorflow::Summary::Value* scalar = event.mutable_summary()->add_value();
+  scalar->set_tag(tag);
+  scalar->set_simple_value(static_cast<float>(value));
+  return WriteRecord(event.SerializeAsString());
 }
 
 absl::Status TensorBoardWriter::Flush() {

@@ -1,13 +1,9 @@
-// Training logs: TensorBoard event files and CSV, with no TensorFlow or protobuf dependency.
+// Training logs: TensorBoard event files and CSV, with no TensorFlow dependency.
 //
 // An event file is a sequence of TFRecords:
 //   uint64 length (little-endian) | uint32 masked_crc32c(length bytes) |
 //   payload (length bytes)        | uint32 masked_crc32c(payload)
-// where each payload is a hand-encoded `tensorflow.Event` protobuf message:
-//   Event   { double wall_time = 1; int64 step = 2; string file_version = 3;
-//             Summary summary = 5; }
-//   Summary { repeated Value value = 1; }
-//   Value   { string tag = 1; float simple_value = 2; }
+// where each payload is a `tensorflow.Event` (proto/tensorboard/event.proto, the scalar subset).
 // The first record carries file_version "brain.Event:2"; each scalar is one further record.
 #ifndef MODSKILL_LEARNER_TENSORBOARD_WRITER_H_
 #define MODSKILL_LEARNER_TENSORBOARD_WRITER_H_

@@ -1,5 +1,5 @@
 // ModSkill training: part-level PPO with an AMP discriminator, driving one or many simulation
-// servers over gRPC (DESIGN.md section 3). The learner runs inference for every env it drives
+// servers over gRPC (docs/DESIGN.md section 3). The learner runs inference for every env it drives
 // (central inference) and overlaps each session's simulation with the other sessions' inference.
 #ifndef MODSKILL_LEARNER_TRAINER_H_
 #define MODSKILL_LEARNER_TRAINER_H_

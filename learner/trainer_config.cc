@@ -14,7 +14,7 @@ absl::StatusOr<TrainerConfig> TrainerConfig::ForPreset(const std::string& preset
   TrainerConfig config;
   config.model = *model;
   if (preset == "paper") {
-    // DESIGN.md section 3 (PHC): lr 2e-5, horizon 32, minibatch 16384, 6 epochs, 3072 envs.
+    // docs/DESIGN.md section 3 (PHC): lr 2e-5, horizon 32, minibatch 16384, 6 epochs, 3072 envs.
     config.learning_rate = 2e-5;
     config.discriminator_learning_rate = 2e-5;
     config.epochs = 6;

@@ -1,4 +1,4 @@
-// Active skill learning's clip sampler (DESIGN.md section 3): clips the learner fails on are
+// Active skill learning's clip sampler (docs/DESIGN.md section 3): clips the learner fails on are
 // drawn more often. Two schemes from the literature, plus the uniform ablation:
 //   kFailureCount (PHC): probability ∝ a clip's recent failures. "Recent" is an exponential
 //     moving count, so that a clip that is learned drifts back: count += 1 per failure,

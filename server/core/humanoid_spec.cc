@@ -25,7 +25,7 @@ struct PdGains {
   double kp, kd, torque_limit;
 };
 
-// PHC's PD gains by body family (DESIGN.md section 2).
+// PHC's PD gains by body family (docs/DESIGN.md section 2).
 PdGains PhcGainsFor(absl::string_view body) {
   auto has = [&](absl::string_view s) { return absl::StrContains(body, s); };
   if (has("Hip") || has("Knee") || has("Ankle")) return {800, 80, 500};

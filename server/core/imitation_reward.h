@@ -1,4 +1,4 @@
-// PHC's imitation reward and the energy penalty (DESIGN.md section 3), term by term.
+// PHC's imitation reward and the energy penalty (docs/DESIGN.md section 3), term by term.
 #ifndef MODSKILL_SERVER_CORE_IMITATION_REWARD_H_
 #define MODSKILL_SERVER_CORE_IMITATION_REWARD_H_
 

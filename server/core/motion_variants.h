@@ -1,6 +1,6 @@
-// ModSkill's built-in generator for generative resampling (DESIGN.md section 3, "Active skill
+// ModSkill's built-in generator for generative resampling (docs/DESIGN.md section 3, "Active skill
 // learning"): new clips from a failed clip without a GPU or an external text-to-motion model.
-// It follows the motion displacement mapping and time warping of Lee et al. 2021 (DESIGN.md
+// It follows the motion displacement mapping and time warping of Lee et al. 2021 (docs/DESIGN.md
 // section 4): m'(t) = (m_0 (+) d)(phi(t)), with
 //   - d: a smooth, bounded exp-map displacement per joint, q'_j = q_j * exp(d_j(t)), from random
 //     knots joined by smoothstep segments (a convex blend, so |d_j(t)| <= rotation_amplitude);

@@ -1,4 +1,4 @@
-// Tracking and AMP observations (DESIGN.md sections 2 and 3), written straight into a row of
+// Tracking and AMP observations (docs/DESIGN.md sections 2 and 3), written straight into a row of
 // the batch buffer. Everything is expressed in the agent's heading frame.
 #ifndef MODSKILL_SERVER_CORE_OBSERVATION_H_
 #define MODSKILL_SERVER_CORE_OBSERVATION_H_

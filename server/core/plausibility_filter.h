@@ -1,7 +1,7 @@
 // Whether a clip (typically a generated variant, see motion_variants.h) is worth training on:
 // cheap kinematic checks for the defects generators produce, plus the AMP discriminator's
 // verdict when the caller has one (ModSkill's public code keeps a generated clip only if the
-// discriminator scores >= 0.5 on 30 random frames; DESIGN.md section 3).
+// discriminator scores >= 0.5 on 30 random frames; docs/DESIGN.md section 3).
 //
 // Checks, in this order; the first that fails is the verdict's reason:
 //   joint_limit    every hinge angle (dof_pos) within [range_low - max_limit_violation,

@@ -1,5 +1,5 @@
 // The clips one simulation session trains on when generative resampling is on (ModSkill's
-// active skill learning, DESIGN.md section 3): the session's original clips, which never leave,
+// active skill learning, docs/DESIGN.md section 3): the session's original clips, which never leave,
 // plus generated variants of the clips it fails on, each with its provenance, under a cap.
 //
 // Three numbers per clip, which must not be confused:
