@@ -13,6 +13,7 @@ PACKAGES=(
   libopenblas0-pthread
   libgtest-dev libgmock-dev
   openssl  # tests/tls_server_test makes a throwaway CA and certificates with it
+  clang libfuzzer-14-dev  # the fuzz targets deploy/test.sh runs (fuzz/run.sh, build-fuzz/)
   python3-grpcio python3-numpy python3-matplotlib
 )
 

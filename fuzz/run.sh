@@ -1,25 +1,29 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets with clang in build-fuzz/ and runs each for SECONDS (default 10)
 # on a copy of its committed seed corpus (fuzz/corpus/<target>/ stays as it is), printing
-# libFuzzer's final stats (executions, coverage). Exits non-zero when a target crashes; the
-# crashing input is left in build-fuzz/artifacts/.
+# libFuzzer's final stats (executions, coverage). Exits 1 when a target crashes (the crashing
+# input is left in build-fuzz/artifacts/), 77 when clang or libFuzzer is not installed.
 #
-#   fuzz/run.sh [SECONDS] [TARGET...]       TARGET: bvh deepmimic npz msclip (default: all)
+#   fuzz/run.sh [SECONDS] [TARGET...]
+#     TARGET: bvh deepmimic npz msclip policy_spec simulate_request (default: all)
 #
-# CI runs it for a few seconds; for the 10-minute runs of fuzz/RESULTS.md: fuzz/run.sh 600.
+# deploy/test.sh (CI) runs it for 5 s a target; for the 10-minute runs of fuzz/RESULTS.md:
+# fuzz/run.sh 600.
 set -euo pipefail
 
 seconds="${1:-10}"
 shift || true
 targets=("$@")
-[[ ${#targets[@]} -gt 0 ]] || targets=(bvh deepmimic npz msclip)
+[[ ${#targets[@]} -gt 0 ]] || targets=(bvh deepmimic npz msclip policy_spec simulate_request)
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${repo}/build-fuzz"
 jobs="${FUZZ_BUILD_JOBS:-2}"
 
-if ! command -v clang++ >/dev/null; then
-  echo "fuzz/run.sh: clang++ is missing (apt-get install clang libfuzzer-14-dev)" >&2
-  exit 2
+if ! command -v clang++ >/dev/null ||
+   ! echo 'extern "C" int LLVMFuzzerTestOneInput(const char*, unsigned long) { return 0; }' |
+     clang++ -x c++ -fsanitize=fuzzer -o /dev/null - 2>/dev/null; then
+  echo "fuzz/run.sh: clang++ with libFuzzer is missing (apt-get install clang libfuzzer-14-dev)" >&2
+  exit 77
 fi
 CC=clang CXX=clang++ cmake -S "${repo}" -B "${build}" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DMODSKILL_FUZZ=ON \
   -DMODSKILL_BUILD_TESTS=OFF -DMODSKILL_BUILD_BENCH=OFF >/dev/null
