@@ -1,0 +1,128 @@
+// What the server makes of a client's session config and a checkpoint's env_spec.json, without
+// a server: ParseSessionConfig (server/service/session_config_validation.h) and
+// PolicySpec::FromJson (policy_spec.h), the code fuzz/simulate_request_fuzzer and
+// fuzz/policy_spec_fuzzer run. The seed inputs of both fuzzers are checked here too.
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "server/core/humanoid_spec.h"
+#include "server/core/part_layout.h"
+#include "server/service/policy_spec.h"
+#include "server/service/session_config_validation.h"
+
+namespace modskill {
+namespace {
+
+constexpr int kMaxEnvs = 4096;
+
+const PartLayoutCatalog& Layouts() {
+  static const PartLayoutCatalog* layouts = [] {
+    auto skeleton = HumanoidSpec::LoadDefault();
+    EXPECT_TRUE(skeleton.ok());
+    auto catalog = PartLayoutCatalog::LoadDefault(*skeleton);
+    EXPECT_TRUE(catalog.ok());
+    return new PartLayoutCatalog(*std::move(catalog));
+  }();
+  return *layouts;
+}
+
+std::string ReadFile(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream bytes;
+  bytes << in.rdbuf();
+  return bytes.str();
+}
+
+absl::StatusCode CodeOf(const v1::SessionConfig& config) {
+  return ParseSessionConfig(config, kMaxEnvs, Layouts()).status().code();
+}
+
+TEST(SessionConfigTest, DefaultsFillTheUnsetFields) {
+  v1::SessionConfig config;
+  config.set_num_envs(3);
+  auto settings = ParseSessionConfig(config, kMaxEnvs, Layouts());
+  ASSERT_TRUE(settings.ok()) << settings.status();
+  EXPECT_EQ(settings->num_envs, 3);
+  EXPECT_EQ(settings->layout.name, Layouts().default_name());
+  EXPECT_EQ(settings->env.termination, TerminationMode::kTraining);
+  EXPECT_DOUBLE_EQ(settings->env.termination_distance, 0.25);
+  EXPECT_EQ(settings->env.action.mode, ActionMode::kAbsolute);
+  EXPECT_EQ(settings->amp_frames, kAmpHistory);
+
+  config.set_termination(v1::EVALUATION);
+  config.set_amp_obs(v1::OMIT);
+  config.set_action_mode(v1::RESIDUAL);
+  settings = ParseSessionConfig(config, kMaxEnvs, Layouts());
+  ASSERT_TRUE(settings.ok()) << settings.status();
+  EXPECT_DOUBLE_EQ(settings->env.termination_distance, 0.5);
+  EXPECT_EQ(settings->env.action.mode, ActionMode::kResidual);
+  EXPECT_EQ(settings->amp_frames, 0);
+}
+
+TEST(SessionConfigTest, EveryBadFieldHasItsCode) {
+  v1::SessionConfig good;
+  good.set_num_envs(1);
+  ASSERT_EQ(CodeOf(good), absl::StatusCode::kOk);
+  auto with = [&](auto change) {
+    v1::SessionConfig config = good;
+    change(config);
+    return CodeOf(config);
+  };
+  EXPECT_EQ(with([](auto& c) { c.set_num_envs(0); }), absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(with([](auto& c) { c.set_num_envs(kMaxEnvs + 1); }), absl::StatusCode::kResourceExhausted);
+  EXPECT_EQ(with([](auto& c) { c.set_max_episode_steps(-1); }), absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(with([](auto& c) { c.set_part_layout("7part"); }), absl::StatusCode::kNotFound);
+  EXPECT_EQ(with([](auto& c) { c.set_termination(static_cast<v1::TerminationMode>(9)); }),
+            absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(with([](auto& c) { c.set_termination_distance(std::nanf("")); }), absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(with([](auto& c) { c.set_termination_distance(-1); }), absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(with([](auto& c) { c.set_residual_scale(0.5f); }), absl::StatusCode::kInvalidArgument);  // not RESIDUAL
+  EXPECT_EQ(with([](auto& c) { c.set_action_mode(static_cast<v1::ActionMode>(-4)); }),
+            absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(with([](auto& c) { c.set_termination_bodies(static_cast<v1::TerminationBodies>(3)); }),
+            absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(with([](auto& c) { c.set_amp_obs(static_cast<v1::AmpObs>(4)); }), absl::StatusCode::kInvalidArgument);
+}
+
+TEST(SessionConfigTest, SeedRequestsOfTheFuzzerDecode) {
+  const std::filesystem::path dir = std::filesystem::path(MODSKILL_REPO_DIR) / "fuzz/corpus/simulate_request";
+  int configs = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    v1::SimulateRequest request;
+    ASSERT_TRUE(request.ParseFromString(ReadFile(entry.path()))) << entry.path();
+    if (!request.has_config()) continue;
+    EXPECT_TRUE(ParseSessionConfig(request.config(), kMaxEnvs, Layouts()).ok()) << entry.path();
+    ++configs;
+  }
+  EXPECT_GE(configs, 3);
+}
+
+TEST(PolicySpecTest, ShippedSpecsParseAndRoundTrip) {
+  const std::filesystem::path dir = std::filesystem::path(MODSKILL_REPO_DIR) / "fuzz/corpus/policy_spec";
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    auto spec = PolicySpec::FromJson(ReadFile(entry.path()));
+    ASSERT_TRUE(spec.ok()) << entry.path() << ": " << spec.status();
+    EXPECT_EQ(spec->action_size, static_cast<int>(spec->joint_names.size()));
+    auto again = PolicySpec::FromJson(spec->ToJson());
+    ASSERT_TRUE(again.ok()) << again.status();
+    EXPECT_EQ(again->ToJson(), spec->ToJson());
+  }
+}
+
+TEST(PolicySpecTest, BadSpecsAreInvalidArgument) {
+  for (const char* json : {"", "[]", "{}", R"({"part_layout": 5})",
+                           R"({"part_layout": "5part", "obs_size": 1099511627776, "action_size": 1,
+                               "joint_names": [], "control_dt": 0.03})",
+                           R"({"part_layout": "5part", "obs_size": 1, "action_size": 1, "joint_names": [],
+                               "control_dt": 0.03, "action_mode": "sideways"})"}) {
+    EXPECT_EQ(PolicySpec::FromJson(json).status().code(), absl::StatusCode::kInvalidArgument) << json;
+  }
+}
+
+}  // namespace
+}  // namespace modskill
