@@ -15,6 +15,7 @@
 #include "server/core/humanoid_model.h"
 #include "server/core/part_layout.h"
 #include "server/service/policy_checkpoint.h"
+#include "tests/process_memory.h"
 #include "tests/server_fixture.h"
 #include "tests/test_files.h"
 
@@ -60,7 +61,11 @@ class CheckpointDirTest : public ::testing::Test {
     request.set_checkpoint_path(path);
     request.add_clips("deepmimic_walk");
     request.set_max_steps_per_clip(5);
-    return client_->Rollout(request).status();
+    absl::Status status;
+    // A 1 GiB file once took the server to 3.2 GB; now nothing above the upload limit is read.
+    const int64_t growth = testing::PeakGrowthBytes([&] { status = client_->Rollout(request).status(); });
+    EXPECT_LT(growth, int64_t{128} << 20) << path << ": peak resident memory rose by " << (growth >> 20) << " MiB";
+    return status;
   }
 
   std::filesystem::path root_, allowed_;
@@ -101,7 +106,7 @@ TEST_F(CheckpointDirTest, NoRegularFilesAndOversizedFilesAreRefusedWithoutReadin
   EXPECT_EQ(piped.code(), absl::StatusCode::kInvalidArgument) << piped;
   EXPECT_THAT(std::string(piped.message()), HasSubstr("regular file"));
   // Larger than an upload may be (1 MiB here): refused before it is read.
-  ASSERT_TRUE(WriteFileAtomically((allowed_ / "huge.pt").string(), std::string(2 << 20, 'x')).ok());
+  ASSERT_TRUE(WriteFileAtomically((allowed_ / "huge.pt").string(), std::string(64 << 20, 'x')).ok());
   const absl::Status huge = RolloutOf("huge.pt");
   EXPECT_EQ(huge.code(), absl::StatusCode::kResourceExhausted) << huge;
   EXPECT_THAT(std::string(huge.message()), HasSubstr("checkpoint_path"));
@@ -161,7 +166,9 @@ TEST(StatusMessageTest, HugeClientStringsAreNotEchoedAndTheChannelSurvives) {
   v1::SampleReferenceAmpRequest amp;
   amp.set_session_id((*stream)->opened().session_id());
   amp.set_num_samples(65536);
-  const absl::Status too_many_amp = client->SampleReferenceAmp(amp).status();
+  absl::Status too_many_amp;
+  const int64_t growth = testing::PeakGrowthBytes([&] { too_many_amp = client->SampleReferenceAmp(amp).status(); });
+  EXPECT_LT(growth, int64_t{64} << 20) << "peak resident memory rose by " << (growth >> 20) << " MiB";
   EXPECT_EQ(too_many_amp.code(), absl::StatusCode::kInvalidArgument) << too_many_amp;
   EXPECT_THAT(std::string(too_many_amp.message()), HasSubstr("at most 57852"));
 
