@@ -8,6 +8,7 @@ Run by tests/python/run_python_tests.sh, which starts a server and sets:
 and PYTHONPATH=<build>/python.
 """
 
+import dataclasses
 import os
 import socket
 import subprocess
@@ -58,6 +59,13 @@ class TensorTest(unittest.TestCase):
         self.assertEqual(tensor.data, np.array([1.0], "<f4").tobytes())
         self.assertEqual(list(tensor.shape), [1])
         self.assertEqual(tensor.dtype, pb.FLOAT32)
+
+    def test_step_result_has_every_proto_field(self):
+        # The per-env result fields are listed in the proto and here: this fails when they drift.
+        wire = {field.name for field in pb.StepResult.DESCRIPTOR.fields}
+        python = {field.name for field in dataclasses.fields(modskill.StepResult)}
+        self.assertEqual(wire - python - set(modskill.StepResult.SESSION_FIELDS), set())
+        self.assertEqual(python - wire, set())
 
     def test_bad_tensors_raise(self):
         with self.assertRaisesRegex(ValueError, "needs 12"):
@@ -153,6 +161,8 @@ class ClientTest(unittest.TestCase):
                 self.assertTrue(((result.clip_id >= 0) & (result.clip_id < len(session.clip_names))).all())
                 self.assertTrue((result.frame >= 0).all())
                 self.assertTrue((result.mean_body_error <= result.max_body_error + 1e-6).all())
+                self.assertEqual(result.part_error.shape, (n, len(spec.parts)))
+                self.assertTrue((result.part_error <= result.max_body_error[:, None] + 1e-6).all())
             self.assertIs(session.last, result)
             stats = self.client.stats()
             open_sessions = {s["session_id"]: s for s in stats["sessions"]}

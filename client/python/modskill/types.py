@@ -150,6 +150,12 @@ class StepResult:
     ended_frame: np.ndarray  # int32 [N]
     max_body_error: np.ndarray  # float32 [N], m, before any reset
     mean_body_error: np.ndarray  # float32 [N], m
+    # float32 [N, num_parts], m: mean body distance per part (EnvSpec.parts order) before any reset,
+    # which parts a failing env lost; None where the server sent none
+    part_error: Optional[np.ndarray] = None
+
+    # Proto fields the session consumes itself rather than handing to the caller.
+    SESSION_FIELDS = ("motion_set_update",)
 
     @classmethod
     def from_proto(cls, result: pb.StepResult) -> "StepResult":
@@ -173,6 +179,7 @@ class StepResult:
             ended_frame=get("ended_frame"),
             max_body_error=get("max_body_error"),
             mean_body_error=get("mean_body_error"),
+            part_error=tensors.decode_field(result, "part_error"),
         )
 
     @property
