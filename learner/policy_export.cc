@@ -10,7 +10,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
-#include "server/core/atomic_file.h"
+#include "common/atomic_file.h"
 
 namespace modskill::learner {
 namespace {

@@ -4,7 +4,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
-#include "server/service/server_log.h"
+#include "common/log.h"
 
 namespace modskill::learner {
 

@@ -13,11 +13,11 @@
 #include <sstream>
 #include <utility>
 
-#include "absl/strings/str_cat.h"
 #include "absl/strings/match.h"
+#include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
 #include "absl/strings/str_split.h"
-#include "server/core/atomic_file.h"
+#include "common/atomic_file.h"
 #include "tensorboard/event.pb.h"
 
 namespace modskill::learner {

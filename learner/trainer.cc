@@ -13,12 +13,12 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
+#include "common/atomic_file.h"
+#include "common/log.h"
 #include "learner/amp_loss.h"
 #include "learner/gae.h"
 #include "learner/policy_export.h"
 #include "learner/ppo_loss.h"
-#include "server/core/atomic_file.h"
-#include "server/service/server_log.h"
 
 namespace modskill::learner {
 namespace {

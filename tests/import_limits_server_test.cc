@@ -8,7 +8,7 @@
 #include <gmock/gmock.h>
 
 #include "absl/strings/str_cat.h"
-#include "server/core/atomic_file.h"
+#include "common/atomic_file.h"
 #include "tests/npz_test_writer.h"
 #include "tests/process_memory.h"
 #include "tests/server_fixture.h"

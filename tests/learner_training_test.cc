@@ -10,9 +10,9 @@
 #include <gmock/gmock.h>
 
 #include "absl/time/clock.h"
+#include "common/atomic_file.h"
 #include "learner/evaluation.h"
 #include "learner/trainer.h"
-#include "server/core/atomic_file.h"
 #include "server/service/policy_checkpoint.h"
 #include "tests/server_fixture.h"
 

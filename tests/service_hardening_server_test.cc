@@ -11,7 +11,7 @@
 #include <gmock/gmock.h>
 
 #include "absl/strings/str_cat.h"
-#include "server/core/atomic_file.h"
+#include "common/atomic_file.h"
 #include "server/core/humanoid_model.h"
 #include "server/core/part_layout.h"
 #include "server/service/policy_checkpoint.h"

@@ -15,8 +15,8 @@
 #include <gmock/gmock.h>
 
 #include "absl/time/clock.h"
+#include "common/atomic_file.h"
 #include "server/core/adaptive_sampler.h"
-#include "server/core/atomic_file.h"
 #include "server/service/policy_checkpoint.h"
 #include "tests/server_fixture.h"
 

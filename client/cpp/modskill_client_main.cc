@@ -30,7 +30,7 @@
 #include "absl/strings/str_split.h"
 #include "absl/time/time.h"
 #include "client/cpp/simulation_client.h"
-#include "server/core/atomic_file.h"
+#include "common/atomic_file.h"
 
 ABSL_FLAG(std::string, server, "127.0.0.1:50051", "server address, host:port");
 ABSL_FLAG(std::string, auth_token_file, "", "file holding the server's token (sent as 'authorization: Bearer <token>')");

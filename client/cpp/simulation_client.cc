@@ -5,7 +5,8 @@
 #include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
-#include "server/core/atomic_file.h"
+#include "common/atomic_file.h"
+#include "common/grpc_status.h"
 
 namespace modskill {
 
@@ -59,9 +60,7 @@ void SimulationClient::Prepare(grpc::ClientContext* context) const {
 }
 
 absl::Status SimulationClient::FromGrpc(const grpc::Status& status, const std::string& rpc) const {
-  if (status.ok()) return absl::OkStatus();
-  return absl::Status(static_cast<absl::StatusCode>(status.error_code()),
-                      absl::StrCat(options_.server, " ", rpc, ": ", status.error_message()));
+  return FromGrpcStatus(status, absl::StrCat(options_.server, " ", rpc));
 }
 
 absl::StatusOr<v1::EnvSpec> SimulationClient::Describe(const std::string& part_layout) {

@@ -16,17 +16,17 @@
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
 #include "absl/flags/usage.h"
-#include "absl/strings/str_cat.h"
 #include "absl/strings/numbers.h"
+#include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_split.h"
 #include "absl/time/clock.h"
+#include "common/atomic_file.h"
+#include "common/log.h"
 #include "learner/evaluation.h"
 #include "learner/tensorboard_writer.h"
 #include "learner/trainer.h"
-#include "server/core/atomic_file.h"
 #include "server/service/policy_checkpoint.h"
-#include "server/service/server_log.h"
 
 ABSL_FLAG(std::vector<std::string>, servers, {}, "simulation servers, host:port, comma-separated");
 ABSL_FLAG(std::string, run_dir, "", "where checkpoints, the exported policy and logs go");

@@ -6,7 +6,7 @@
 
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
-#include "server/core/atomic_file.h"
+#include "common/atomic_file.h"
 #include "server/core/clip_name.h"
 
 namespace modskill {

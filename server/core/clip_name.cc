@@ -6,7 +6,7 @@
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
-#include "server/core/shown_value.h"
+#include "common/shown_value.h"
 
 namespace modskill {
 namespace {

@@ -8,7 +8,7 @@
 
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
-#include "server/core/atomic_file.h"
+#include "common/atomic_file.h"
 #include "server/core/motion_import.h"
 #include "server/core/retarget.h"
 

@@ -8,7 +8,7 @@
 
 #include "absl/time/clock.h"
 #include "absl/time/time.h"
-#include "server/service/server_log.h"
+#include "common/log.h"
 
 namespace modskill {
 namespace {

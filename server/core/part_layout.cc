@@ -5,9 +5,9 @@
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
-#include "server/core/atomic_file.h"
+#include "common/atomic_file.h"
+#include "common/shown_value.h"
 #include "server/core/data_paths.h"
-#include "server/core/shown_value.h"
 
 namespace modskill {
 

@@ -5,6 +5,7 @@
 #include <grpcpp/grpcpp.h>
 
 #include "absl/strings/str_cat.h"
+#include "common/grpc_status.h"
 #include "server/service/tensor_codec.h"
 
 namespace modskill {
@@ -127,10 +128,7 @@ absl::StatusOr<std::vector<MotionVariant>> ExternalMotionGenerator::Generate(con
                        std::chrono::microseconds(absl::ToInt64Microseconds(timeout_)));
   v1::GenerateMotionResponse reply;
   const grpc::Status status = stub_->Generate(&context, request, &reply);
-  if (!status.ok()) {
-    return absl::Status(static_cast<absl::StatusCode>(status.error_code()),
-                        absl::StrCat("generator ", address_, ": ", status.error_message()));
-  }
+  if (!status.ok()) return FromGrpcStatus(status, absl::StrCat("generator ", address_));
   if (reply.clips_size() == 0 || reply.clips_size() > count) {
     return absl::InvalidArgumentError(
         absl::StrCat("generator ", address_, ": clips: ", reply.clips_size(), " clips for a request of ", count));

@@ -3,11 +3,11 @@
 #include <filesystem>
 
 #include "absl/strings/str_cat.h"
+#include "common/log.h"
 #include "server/core/clip_file.h"
 #include "server/core/clip_name.h"
 #include "server/core/confined_path.h"
 #include "server/service/discriminator_scorer.h"
-#include "server/service/server_log.h"
 
 namespace modskill {
 namespace {

@@ -11,7 +11,7 @@
 
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
-#include "server/core/atomic_file.h"
+#include "common/atomic_file.h"
 
 namespace modskill {
 

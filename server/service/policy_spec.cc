@@ -6,7 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "absl/strings/str_cat.h"
-#include "server/core/shown_value.h"
+#include "common/shown_value.h"
 
 namespace modskill {
 

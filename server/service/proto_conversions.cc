@@ -2,7 +2,6 @@
 
 #include <cstring>
 
-#include "server/service/status_text.h"
 #include "server/service/tensor_codec.h"
 
 namespace modskill {
@@ -92,11 +91,6 @@ void FillStepResult(const EnvBatch& batch, int64_t step, int amp_frames, v1::Ste
   SetFloatTensor({n}, b.max_body_error.data(), out->mutable_max_body_error());
   SetFloatTensor({n}, b.mean_body_error.data(), out->mutable_mean_body_error());
   SetFloatTensor({n, b.num_parts}, b.part_error.data(), out->mutable_part_error());
-}
-
-grpc::Status ToGrpcStatus(const absl::Status& status) {
-  if (status.ok()) return grpc::Status::OK;
-  return CappedStatus(static_cast<grpc::StatusCode>(status.code()), status.message());
 }
 
 }  // namespace modskill

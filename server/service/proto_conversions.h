@@ -21,8 +21,6 @@ void ToProto(const ClipRolloutMetrics& metrics, v1::ClipMetrics* out);
 // Fills a StepResult from the batch's buffers; amp_frames = 0 leaves amp_obs empty.
 void FillStepResult(const EnvBatch& batch, int64_t step, int amp_frames, v1::StepResult* out);
 
-// gRPC's status from abseil's, same code and message.
-grpc::Status ToGrpcStatus(const absl::Status& status);
 
 }  // namespace modskill
 

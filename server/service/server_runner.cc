@@ -5,7 +5,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
-#include "server/core/atomic_file.h"
+#include "common/atomic_file.h"
 
 namespace modskill {
 

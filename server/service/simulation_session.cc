@@ -1,7 +1,7 @@
 #include "server/service/simulation_session.h"
 
 #include "absl/strings/str_cat.h"
-#include "server/core/shown_value.h"
+#include "common/shown_value.h"
 
 namespace modskill {
 namespace {

@@ -14,13 +14,13 @@
 #include "absl/flags/usage.h"
 #include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
+#include "common/atomic_file.h"
+#include "common/log.h"
 #include "server/core/adaptive_sampler.h"
-#include "server/core/atomic_file.h"
 #include "server/core/data_paths.h"
 #include "server/core/resource_limits.h"
 #include "server/core/session_motion_set.h"
 #include "server/service/policy_checkpoint.h"
-#include "server/service/server_log.h"
 #include "server/service/server_runner.h"
 
 ABSL_FLAG(int, port, 50051, "TCP port (0: any free port, printed at start)");

@@ -22,7 +22,8 @@ def read(path):
         rows = list(csv.DictReader(f))
     if not rows:
         raise SystemExit(f"error: {path}: no rows")
-    return {key: [float(row[key]) for row in rows] for key in rows[0]}
+    # Columns added after a run started are empty in its older rows (resumed runs): NaN there.
+    return {key: [float(row[key]) if row[key] not in ("", None) else float("nan") for row in rows] for key in rows[0]}
 
 
 def main():

@@ -1,7 +1,7 @@
 // How a message shows a value a client or a file chose (a clip name, a session id, a layout
 // name): bounded and escaped, so that no input can make an error message huge or unprintable.
-#ifndef MODSKILL_SERVER_CORE_SHOWN_VALUE_H_
-#define MODSKILL_SERVER_CORE_SHOWN_VALUE_H_
+#ifndef MODSKILL_COMMON_SHOWN_VALUE_H_
+#define MODSKILL_COMMON_SHOWN_VALUE_H_
 
 #include <cstddef>
 #include <string>
@@ -18,4 +18,4 @@ std::string ShownValue(absl::string_view value);
 
 }  // namespace modskill
 
-#endif  // MODSKILL_SERVER_CORE_SHOWN_VALUE_H_
+#endif  // MODSKILL_COMMON_SHOWN_VALUE_H_

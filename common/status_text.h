@@ -2,8 +2,8 @@
 // message that echoed a 20 KB session id or a 1 MB clip name failed on the client as
 // RESOURCE_EXHAUSTED and took the channel's other calls with it. Values are shown bounded
 // (core/shown_value.h), and every message the service returns is cut as a backstop.
-#ifndef MODSKILL_SERVER_SERVICE_STATUS_TEXT_H_
-#define MODSKILL_SERVER_SERVICE_STATUS_TEXT_H_
+#ifndef MODSKILL_COMMON_STATUS_TEXT_H_
+#define MODSKILL_COMMON_STATUS_TEXT_H_
 
 #include <cstddef>
 #include <string>
@@ -24,4 +24,4 @@ grpc::Status CappedStatus(grpc::StatusCode code, absl::string_view message);
 
 }  // namespace modskill
 
-#endif  // MODSKILL_SERVER_SERVICE_STATUS_TEXT_H_
+#endif  // MODSKILL_COMMON_STATUS_TEXT_H_

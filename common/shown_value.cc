@@ -1,4 +1,4 @@
-#include "server/core/shown_value.h"
+#include "common/shown_value.h"
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"

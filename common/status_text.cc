@@ -1,4 +1,4 @@
-#include "server/service/status_text.h"
+#include "common/status_text.h"
 
 #include "absl/strings/str_cat.h"
 

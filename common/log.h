@@ -1,6 +1,6 @@
 // One timestamped line per event on stderr (Debian's abseil predates absl/log).
-#ifndef MODSKILL_SERVER_SERVICE_SERVER_LOG_H_
-#define MODSKILL_SERVER_SERVICE_SERVER_LOG_H_
+#ifndef MODSKILL_COMMON_LOG_H_
+#define MODSKILL_COMMON_LOG_H_
 
 #include <cstdio>
 #include <string>
@@ -21,4 +21,4 @@ void LogLine(const absl::FormatSpec<Args...>& format, const Args&... args) {
 
 }  // namespace modskill
 
-#endif  // MODSKILL_SERVER_SERVICE_SERVER_LOG_H_
+#endif  // MODSKILL_COMMON_LOG_H_

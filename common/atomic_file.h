@@ -1,6 +1,6 @@
 // Writes a file so that readers see either the old or the complete new content, never a torn one.
-#ifndef MODSKILL_SERVER_CORE_ATOMIC_FILE_H_
-#define MODSKILL_SERVER_CORE_ATOMIC_FILE_H_
+#ifndef MODSKILL_COMMON_ATOMIC_FILE_H_
+#define MODSKILL_COMMON_ATOMIC_FILE_H_
 
 #include <string>
 
@@ -17,4 +17,4 @@ absl::StatusOr<std::string> ReadFileToString(const std::string& path, size_t max
 
 }  // namespace modskill
 
-#endif  // MODSKILL_SERVER_CORE_ATOMIC_FILE_H_
+#endif  // MODSKILL_COMMON_ATOMIC_FILE_H_
