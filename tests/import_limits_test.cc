@@ -22,6 +22,7 @@
 #include "server/core/resource_limits.h"
 #include "tests/npz_test_writer.h"
 #include "tests/test_files.h"
+#include "tests/test_fixtures.h"
 
 namespace modskill {
 namespace {
@@ -31,17 +32,7 @@ using ::testing::HasSubstr;
 
 std::string TempPath(const std::string& file_name) { return TestTempPath("import_limits_test", file_name); }
 
-const HumanoidSpec& Spec() {
-  static const HumanoidSpec* spec = [] {
-    auto loaded = HumanoidSpec::LoadDefault();
-    if (!loaded.ok()) {
-      ADD_FAILURE() << loaded.status();
-      std::abort();
-    }
-    return new HumanoidSpec(*std::move(loaded));
-  }();
-  return *spec;
-}
+const HumanoidSpec& Spec() { return DefaultSpec(); }
 
 // Imports `bytes` written to a file named `file_name` and expects InvalidArgument mentioning
 // every one of `fragments`.

@@ -29,6 +29,7 @@
 #include "server/core/rotation_math.h"
 #include "tests/npz_test_writer.h"
 #include "tests/test_files.h"
+#include "tests/test_fixtures.h"
 
 namespace modskill {
 namespace {
@@ -50,17 +51,7 @@ std::string ReadBytes(const std::string& path) {
   return std::string(std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>());
 }
 
-const HumanoidSpec& Spec() {
-  static const HumanoidSpec* spec = [] {
-    auto loaded = HumanoidSpec::LoadDefault();
-    if (!loaded.ok()) {
-      ADD_FAILURE() << loaded.status();
-      std::abort();
-    }
-    return new HumanoidSpec(*std::move(loaded));
-  }();
-  return *spec;
-}
+const HumanoidSpec& Spec() { return DefaultSpec(); }
 
 int Body(const std::string& name) {
   const int index = Spec().BodyIndex(name);
