@@ -5,6 +5,7 @@
 #include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
+#include "client/cpp/step_result_check.h"
 #include "common/atomic_file.h"
 #include "common/grpc_status.h"
 
@@ -162,6 +163,9 @@ absl::StatusOr<std::unique_ptr<SimulationStream>> SimulationClient::OpenSession(
   stream->live_clips_ = stream->opened_.clip_names_size();
   stream->num_envs_ = config.num_envs();
   stream->action_size_ = stream->opened_.spec().action_size();
+  if (absl::Status status = CheckStepResult(stream->opened_.initial(), stream->num_envs_, stream->spec()); !status.ok()) {
+    return absl::Status(status.code(), absl::StrCat(options_.server, " Simulate: initial ", status.message()));
+  }
   return stream;
 }
 
@@ -198,6 +202,9 @@ absl::Status SimulationStream::ReceiveResult() {
   if (closed_) return absl::FailedPreconditionError("session: already closed");
   if (!stream_->Read(&response_)) return Fail("Simulate");
   if (!response_.has_step()) return absl::InternalError(absl::StrCat(server_, " Simulate: expected a step result"));
+  if (absl::Status status = CheckStepResult(response_.step(), num_envs_, spec()); !status.ok()) {
+    return absl::Status(status.code(), absl::StrCat(server_, " Simulate: ", status.message()));
+  }
   last_response_bytes_ = response_.ByteSizeLong();
   if (response_.step().has_motion_set_update()) {
     const v1::MotionSetUpdate& update = response_.step().motion_set_update();
