@@ -21,11 +21,12 @@ namespace modskill::fuzz {
 namespace {
 
 constexpr int kMaxEnvsPerSession = 4096;  // ServiceOptions' default
+constexpr int kMaxLibraryClips = 10000;   // ServiceOptions' default
 constexpr int64_t kEnvs = 2;              // the session an action message is read for
 
 void FuzzSessionConfig(const v1::SessionConfig& config) {
   const ServiceFixture& fixture = Fixture();
-  auto settings = ParseSessionConfig(config, kMaxEnvsPerSession, fixture.layouts);
+  auto settings = ParseSessionConfig(config, kMaxEnvsPerSession, kMaxLibraryClips, fixture.layouts);
   if (!settings.ok()) {
     const absl::StatusCode code = settings.status().code();
     Check(code == absl::StatusCode::kInvalidArgument || code == absl::StatusCode::kNotFound ||

@@ -19,6 +19,7 @@ namespace modskill {
 namespace {
 
 constexpr int kMaxEnvs = 4096;
+constexpr int kMaxLibraryClips = 10000;
 
 const PartLayoutCatalog& Layouts() {
   static const PartLayoutCatalog* layouts = [] {
@@ -39,13 +40,13 @@ std::string ReadFile(const std::filesystem::path& path) {
 }
 
 absl::StatusCode CodeOf(const v1::SessionConfig& config) {
-  return ParseSessionConfig(config, kMaxEnvs, Layouts()).status().code();
+  return ParseSessionConfig(config, kMaxEnvs, kMaxLibraryClips, Layouts()).status().code();
 }
 
 TEST(SessionConfigTest, DefaultsFillTheUnsetFields) {
   v1::SessionConfig config;
   config.set_num_envs(3);
-  auto settings = ParseSessionConfig(config, kMaxEnvs, Layouts());
+  auto settings = ParseSessionConfig(config, kMaxEnvs, kMaxLibraryClips, Layouts());
   ASSERT_TRUE(settings.ok()) << settings.status();
   EXPECT_EQ(settings->num_envs, 3);
   EXPECT_EQ(settings->layout.name, Layouts().default_name());
@@ -57,7 +58,7 @@ TEST(SessionConfigTest, DefaultsFillTheUnsetFields) {
   config.set_termination(v1::EVALUATION);
   config.set_amp_obs(v1::OMIT);
   config.set_action_mode(v1::RESIDUAL);
-  settings = ParseSessionConfig(config, kMaxEnvs, Layouts());
+  settings = ParseSessionConfig(config, kMaxEnvs, kMaxLibraryClips, Layouts());
   ASSERT_TRUE(settings.ok()) << settings.status();
   EXPECT_DOUBLE_EQ(settings->env.termination_distance, 0.5);
   EXPECT_EQ(settings->env.action.mode, ActionMode::kResidual);
@@ -96,7 +97,7 @@ TEST(SessionConfigTest, SeedRequestsOfTheFuzzerDecode) {
     v1::SimulateRequest request;
     ASSERT_TRUE(request.ParseFromString(ReadFile(entry.path()))) << entry.path();
     if (!request.has_config()) continue;
-    EXPECT_TRUE(ParseSessionConfig(request.config(), kMaxEnvs, Layouts()).ok()) << entry.path();
+    EXPECT_TRUE(ParseSessionConfig(request.config(), kMaxEnvs, kMaxLibraryClips, Layouts()).ok()) << entry.path();
     ++configs;
   }
   EXPECT_GE(configs, 3);

@@ -6,13 +6,14 @@
 namespace modskill {
 
 TrackingErrors ComputeImitationTerms(const ImitationRewardConfig& config, const HumanoidState& sim,
-                                     const HumanoidState& reference, float* terms) {
+                                     const HumanoidState& reference, float* terms, double* body_distance) {
   const int bodies = static_cast<int>(sim.body_pos.size());
   TrackingErrors errors;
   double pos_sq = 0, rot_sq = 0, vel_sq = 0, ang_vel_sq = 0;
   for (int b = 0; b < bodies; ++b) {
     const double distance_sq = (reference.body_pos[b] - sim.body_pos[b]).squaredNorm();
     const double distance = std::sqrt(distance_sq);
+    if (body_distance != nullptr) body_distance[b] = distance;
     errors.max_body_distance = std::max(errors.max_body_distance, distance);
     errors.mean_body_distance += distance;
     pos_sq += distance_sq;

@@ -21,9 +21,10 @@ struct TrackingErrors {
   double mean_body_distance = 0;  // m
 };
 
-// Fills terms[kRewardPos..kRewardAngVel] (weighted) and returns the body distance errors.
+// Fills terms[kRewardPos..kRewardAngVel] (weighted) and returns the body distance errors; when
+// `body_distance` is given, also each body's distance (m) there, for termination and per-part errors.
 TrackingErrors ComputeImitationTerms(const ImitationRewardConfig& config, const HumanoidState& sim,
-                                     const HumanoidState& reference, float* terms);
+                                     const HumanoidState& reference, float* terms, double* body_distance = nullptr);
 
 }  // namespace modskill
 

@@ -5,9 +5,18 @@
 #include <cstring>
 #include <limits>
 
+#include "absl/strings/str_cat.h"
 #include "server/core/observation.h"
 
 namespace modskill {
+
+absl::StatusOr<TerminationBodies> ParseTerminationBodies(absl::string_view name) {
+  if (name == "all") return TerminationBodies::kAll;
+  if (name == "no_feet") return TerminationBodies::kNoFeet;
+  return absl::InvalidArgumentError(absl::StrCat("'", name.substr(0, 64), "' is not all or no_feet"));
+}
+
+std::vector<std::string> TerminationBodiesNames() { return {"all", "no_feet"}; }
 
 TrackingEnv::TrackingEnv(const EnvContext* context, uint64_t seed)
     : context_(context), data_(mj_makeData(context->humanoid->model())), pd_(*context->humanoid), rng_(seed) {
@@ -16,6 +25,7 @@ TrackingEnv::TrackingEnv(const EnvContext* context, uint64_t seed)
   reference_.Resize(bodies, hinges);
   target_.Resize(bodies, hinges);
   pd_targets_.assign(hinges, 0.0);
+  body_distance_.assign(bodies, 0.0);
   amp_history_.assign(static_cast<size_t>(kAmpHistory) * context->spec->amp_obs_per_frame, 0.f);
 }
 
@@ -63,7 +73,7 @@ bool TrackingEnv::PhysicsDiverged() const {
 TrackingErrors TrackingEnv::CurrentTrackingTerms(float* terms) {
   ReadSimulatedState(*context_->humanoid, data_, &sim_);
   ReadReferenceState(*motion_, frame_, &reference_);
-  return ComputeImitationTerms(context_->config.reward, sim_, reference_, terms);
+  return ComputeImitationTerms(context_->config.reward, sim_, reference_, terms, body_distance_.data());
 }
 
 void TrackingEnv::Step(const float* action, EnvRow row) {
@@ -139,9 +149,7 @@ bool TrackingEnv::Terminated(const TrackingErrors& errors) const {
       // Never on the first step after a reset (PHC): the state there is the reference's own.
       if (episode_steps_ <= 1) return false;
       double farthest = 0;
-      for (int b : context_->termination_body_ids) {
-        farthest = std::max(farthest, (reference_.body_pos[b] - sim_.body_pos[b]).norm());
-      }
+      for (int b : context_->termination_body_ids) farthest = std::max(farthest, body_distance_[b]);
       return farthest > config.termination_distance;
     }
     case TerminationMode::kEvaluation:
@@ -153,11 +161,11 @@ bool TrackingEnv::Terminated(const TrackingErrors& errors) const {
 }
 
 void TrackingEnv::WritePartErrors(float* part_error) const {
-  // sim_ and reference_ hold this step's states (CurrentTrackingTerms just read them).
+  // body_distance_ holds this step's distances (CurrentTrackingTerms just computed them).
   const std::vector<BodyPart>& parts = context_->spec->layout.parts;
   for (size_t p = 0; p < parts.size(); ++p) {
     double total = 0;
-    for (int b : parts[p].bodies) total += (reference_.body_pos[b] - sim_.body_pos[b]).norm();
+    for (int b : parts[p].bodies) total += body_distance_[b];
     part_error[p] = parts[p].bodies.empty() ? 0.f : static_cast<float>(total / parts[p].bodies.size());
   }
 }

@@ -6,10 +6,13 @@
 #include <cstdint>
 #include <memory>
 #include <random>
+#include <string>
 #include <vector>
 
 #include <mujoco/mujoco.h>
 
+#include "absl/status/statusor.h"
+#include "absl/strings/string_view.h"
 #include "server/core/action_mapping.h"
 #include "server/core/batch_buffers.h"
 #include "server/core/clip_sampler.h"
@@ -34,6 +37,10 @@ enum class TerminationBodies {
   kAll,
   kNoFeet,  // every body but the ankles and toes (PHC): feet slip without the character falling
 };
+
+// "all" / "no_feet": the names flags, configs and Describe use.
+absl::StatusOr<TerminationBodies> ParseTerminationBodies(absl::string_view name);
+std::vector<std::string> TerminationBodiesNames();
 
 struct TrackingEnvConfig {
   TerminationMode termination = TerminationMode::kTraining;
@@ -121,6 +128,7 @@ class TrackingEnv {
   // Preallocated scratch so that Step never allocates.
   HumanoidState sim_, reference_, target_;
   std::vector<double> pd_targets_;
+  std::vector<double> body_distance_;  // this step's per-body distance to the reference (m)
   std::vector<float> amp_history_;  // ring of kAmpHistory frames
   int amp_head_ = 0;                // index of the newest frame
 };

@@ -68,7 +68,7 @@ absl::StatusOr<TerminationBodies> ToTerminationBodies(v1::TerminationBodies bodi
 }
 
 absl::StatusOr<SessionSettings> ParseSessionConfig(const v1::SessionConfig& config, int max_envs_per_session,
-                                                   const PartLayoutCatalog& layouts) {
+                                                   int max_library_clips, const PartLayoutCatalog& layouts) {
   SessionSettings settings;
   if (config.num_envs() < 1) {
     return absl::InvalidArgumentError(absl::StrCat("num_envs: ", config.num_envs(), " must be >= 1"));
@@ -90,6 +90,11 @@ absl::StatusOr<SessionSettings> ParseSessionConfig(const v1::SessionConfig& conf
   if (!termination_bodies.ok()) return termination_bodies.status();
   if (!v1::AmpObs_IsValid(config.amp_obs())) return absl::InvalidArgumentError("amp_obs: unknown value");
   settings.amp_frames = config.amp_obs() == v1::NEWEST ? 1 : config.amp_obs() == v1::OMIT ? 0 : kAmpHistory;
+  if (config.motions_size() > max_library_clips) {
+    return absl::InvalidArgumentError(absl::StrCat("motions: ", config.motions_size(),
+                                                   " names, more than the library may hold (", max_library_clips,
+                                                   ", --max_library_clips)"));
+  }
 
   settings.num_envs = config.num_envs();
   settings.seed = config.seed();

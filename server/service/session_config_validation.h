@@ -27,10 +27,10 @@ struct SessionSettings {
 
 // The checks in the order the service reports them: num_envs in [1, max_envs_per_session]
 // (above: RESOURCE_EXHAUSTED), max_episode_steps >= 0, the layout (NOT_FOUND), termination,
-// its distance, action mode and residual scale, termination bodies, amp_obs (INVALID_ARGUMENT).
-// The clip names in config.motions are left to the library.
+// its distance, action mode and residual scale, termination bodies, amp_obs, no more motion names
+// than max_library_clips (INVALID_ARGUMENT). The clip names themselves are left to the library.
 absl::StatusOr<SessionSettings> ParseSessionConfig(const v1::SessionConfig& config, int max_envs_per_session,
-                                                   const PartLayoutCatalog& layouts);
+                                                   int max_library_clips, const PartLayoutCatalog& layouts);
 
 // The named layout, or the catalog's default for ""; NOT_FOUND for an unknown name.
 absl::StatusOr<PartLayout> FindLayout(const PartLayoutCatalog& layouts, const std::string& name);

@@ -156,8 +156,7 @@ grpc::Status SimulationService::Describe(grpc::ServerContext* context, const v1:
   ToProto(MakeEnvSpec(*humanoid_, *layout), *humanoid_, response);
   for (const std::string& name : layouts_->Names()) response->add_part_layouts(name);
   for (const std::string& name : ActionModeNames()) response->add_action_modes(name);
-  response->add_termination_bodies("all");
-  response->add_termination_bodies("no_feet");
+  for (const std::string& name : TerminationBodiesNames()) response->add_termination_bodies(name);
   response->set_num_motions(motions_.Snapshot()->size());
   return grpc::Status::OK;
 }
@@ -171,16 +170,11 @@ grpc::Status SimulationService::Simulate(grpc::ServerContext* context,
     return Error(grpc::StatusCode::INVALID_ARGUMENT, "config: the first message must carry the session config");
   }
   const v1::SessionConfig& config = request.config();
-  auto settings = ParseSessionConfig(config, options_.max_envs_per_session, *layouts_);
+  auto settings = ParseSessionConfig(config, options_.max_envs_per_session, options_.max_library_clips, *layouts_);
   if (!settings.ok()) return ToGrpcStatus(settings.status());
   const int amp_frames = settings->amp_frames;
 
   std::shared_ptr<const MotionLibrary> motions = motions_.Snapshot();
-  if (config.motions_size() > options_.max_library_clips) {
-    return Error(grpc::StatusCode::INVALID_ARGUMENT,
-                 absl::StrCat("motions: ", config.motions_size(), " names, more than the library may hold (",
-                              options_.max_library_clips, ", --max_library_clips)"));
-  }
   if (config.motions_size() > 0) {
     auto subset = motions->Subset({config.motions().begin(), config.motions().end()});
     if (!subset.ok()) return ToGrpcStatus(subset.status());
