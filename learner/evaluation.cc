@@ -122,15 +122,21 @@ std::string EvaluationReport::ToMarkdown(const std::string& method) const {
   return md;
 }
 
-absl::StatusOr<std::string> OpenLoopReferencePolicy(const v1::EnvSpec& spec) {
+PolicySpec PolicySpecOf(const v1::EnvSpec& spec, const ActionMapping& action) {
   PolicySpec policy;
   policy.part_layout = spec.part_layout();
   policy.obs_size = spec.obs_size();
   policy.action_size = spec.action_size();
   policy.joint_names.assign(spec.joint_names().begin(), spec.joint_names().end());
   policy.control_dt = spec.control_dt();
-  policy.action.mode = ActionMode::kResidual;
-  return AffinePolicyBytes(policy, {}, {});
+  policy.action = action;
+  return policy;
+}
+
+absl::StatusOr<std::string> OpenLoopReferencePolicy(const v1::EnvSpec& spec) {
+  ActionMapping residual;
+  residual.mode = ActionMode::kResidual;
+  return AffinePolicyBytes(PolicySpecOf(spec, residual), {}, {});
 }
 
 std::string CompareWithBaseline(const EvaluationReport& policy, const EvaluationReport& baseline) {

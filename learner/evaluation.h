@@ -8,6 +8,7 @@
 
 #include "absl/status/statusor.h"
 #include "client/cpp/simulation_client.h"
+#include "server/service/policy_spec.h"
 
 namespace modskill::learner {
 
@@ -34,6 +35,9 @@ struct EvaluationReport {
 // Runs the TorchScript policy in `checkpoint_bytes` on `clips` (empty: all) on `client`'s server.
 absl::StatusOr<EvaluationReport> Evaluate(SimulationClient& client, const std::string& checkpoint_name,
                                           const std::string& checkpoint_bytes, const std::vector<std::string>& clips);
+
+// The metadata of a policy for a server's env `spec`, run with `action` (what policy.pt carries).
+PolicySpec PolicySpecOf(const v1::EnvSpec& spec, const ActionMapping& action);
 
 // The open-loop reference baseline: a zero policy in residual mode, so every PD target is the
 // reference pose of the next frame. What a learned tracker must beat.

@@ -16,9 +16,11 @@
 #include "common/atomic_file.h"
 #include "common/log.h"
 #include "learner/amp_loss.h"
+#include "learner/evaluation.h"
 #include "learner/gae.h"
 #include "learner/policy_export.h"
 #include "learner/ppo_loss.h"
+#include "server/core/tracking_env.h"
 
 namespace modskill::learner {
 namespace {
@@ -99,9 +101,10 @@ absl::StatusOr<std::unique_ptr<Trainer>> Trainer::Create(const TrainerConfig& co
   const bool residual = ActionModeOf(config) == ActionMode::kResidual;
   pool.session.set_action_mode(residual ? v1::RESIDUAL : v1::ABSOLUTE);
   if (residual) pool.session.set_residual_scale(static_cast<float>(config.residual_scale));
-  pool.session.set_termination_distance(
-      static_cast<float>(config.curriculum_start > 0 ? config.curriculum_start : config.termination_distance));
-  pool.session.set_termination_bodies(config.termination_bodies == "no_feet" ? v1::NO_FEET : v1::ALL);
+  // The curriculum's starting distance; every action message then carries the current one.
+  pool.session.set_termination_distance(static_cast<float>(trainer->curriculum_.distance()));
+  pool.session.set_termination_bodies(TerminationBodiesOf(config) == TerminationBodies::kNoFeet ? v1::NO_FEET
+                                                                                                : v1::ALL);
   pool.session.set_amp_obs(v1::FULL);
   trainer->servers_ = std::make_unique<ServerPool>(pool);
   if (absl::Status status = trainer->WaitForServers(); !status.ok()) return status;
@@ -257,6 +260,7 @@ absl::StatusOr<IterationStats> Trainer::Iterate() {
     return stats;
   }
   SummarizeEpisodes(&stats);
+  const ScopedTorchThreads threads(UpdateThreads());  // the servers wait from here on
   TrainingBatch batch = ComputeReturns(usable);
   if (stats.policy_lag > 0) CenterOnCurrentPolicy(&batch);
   const torch::Tensor expert =
@@ -432,7 +436,6 @@ void Trainer::RecordStep(SlotRollout& r, int t) {
 
 Trainer::TrainingBatch Trainer::ComputeReturns(const std::vector<SlotRollout*>& usable) {
   torch::NoGradGuard no_grad;
-  const ScopedTorchThreads threads(UpdateThreads());  // the servers wait from here on
   const int T = config_.horizon;
   const int64_t O = layout_.obs_size, A = layout_.action_size, M = layout_.amp_obs_size;
   TrainingBatch batch;
@@ -479,7 +482,6 @@ Trainer::TrainingBatch Trainer::ComputeReturns(const std::vector<SlotRollout*>& 
 
 void Trainer::CenterOnCurrentPolicy(TrainingBatch* batch) {
   torch::NoGradGuard no_grad;
-  const ScopedTorchThreads threads(UpdateThreads());
   std::vector<torch::Tensor> proximal;
   const torch::Tensor log_std = policy_->log_std();
   const int64_t size = batch->obs.size(0), chunk = 4096;
@@ -513,10 +515,9 @@ torch::Tensor Trainer::SampleLiveAmp(const std::vector<torch::Tensor>& amp_rows,
 }
 
 // PPO (Schulman et al. 2017). A non-finite loss skips its minibatch; non-finite weights after the
-// update roll back to the weights it started from. The servers wait meanwhile, so the update may
-// use more threads than collection (config.update_threads).
+// update roll back to the weights it started from. Iterate gives the update phases
+// config.update_threads torch threads while the servers wait.
 void Trainer::UpdatePolicy(const TrainingBatch& batch, IterationStats* stats) {
-  const ScopedTorchThreads threads(UpdateThreads());
   std::vector<torch::Tensor> snapshot;
   for (const torch::Tensor& p : optimizer_->param_groups()[0].params()) snapshot.push_back(p.detach().clone());
   const torch::Tensor log_std = policy_->log_std();
@@ -586,11 +587,12 @@ torch::Tensor Trainer::FetchReferenceAmp(SessionSlot* source) {
 
 void Trainer::UpdateDiscriminator(const TrainingBatch& batch, const torch::Tensor& expert, IterationStats* stats) {
   if (batch.policy_amp.size(0) == 0 || expert.size(0) == 0) return;
-  const ScopedTorchThreads threads(UpdateThreads());
   amp_norm_->Update(torch::cat({expert, batch.policy_amp}));
   double loss_sum = 0, expert_logit = 0, policy_logit = 0, penalty = 0;
+  const torch::Tensor expert_normalized = amp_norm_->Normalize(expert).detach();
   for (int epoch = 0; epoch < config_.discriminator_epochs; ++epoch) {
-    const torch::Tensor expert_in = amp_norm_->Normalize(expert).detach().requires_grad_(true);
+    // A fresh leaf each epoch: the gradient penalty differentiates through it.
+    const torch::Tensor expert_in = expert_normalized.detach().requires_grad_(true);
     const torch::Tensor policy_in =
         amp_norm_->Normalize(batch.policy_amp.slice(0, epoch * config_.amp_samples, (epoch + 1) * config_.amp_samples));
     const torch::Tensor gradient_penalty = discriminator_->GradientPenalty(expert_in);
@@ -641,10 +643,10 @@ void Trainer::SummarizeEpisodes(IterationStats* stats) {
 }
 
 void Trainer::RecordEpisodeEnds(SessionSlot* slot, const v1::StepResult& result) {
+  // Every field's size was checked against the session when the result arrived (CheckStepResult).
   const int n = slot->num_envs();
   const std::string& done = result.done().data();
   const std::string& truncated = result.truncated().data();
-  if (done.size() != static_cast<size_t>(n) || truncated.size() != static_cast<size_t>(n)) return;
   std::vector<int32_t> clip(n), frame(n);
   std::memcpy(clip.data(), result.ended_clip_id().data().data(), sizeof(int32_t) * n);
   std::memcpy(frame.data(), result.ended_frame().data().data(), sizeof(int32_t) * n);
@@ -807,13 +809,7 @@ absl::Status Trainer::LoadCheckpoint(const std::string& path) {
 }
 
 absl::Status Trainer::ExportPolicy(const std::string& path) {
-  PolicySpec spec;
-  spec.part_layout = spec_.part_layout();
-  spec.obs_size = static_cast<int>(layout_.obs_size);
-  spec.action_size = static_cast<int>(layout_.action_size);
-  spec.joint_names.assign(spec_.joint_names().begin(), spec_.joint_names().end());
-  spec.control_dt = spec_.control_dt();
-  spec.action = ActionMapping{ActionModeOf(config_), config_.residual_scale};
+  const PolicySpec spec = PolicySpecOf(spec_, ActionMapping{ActionModeOf(config_), config_.residual_scale});
   return learner::ExportPolicy(policy_, obs_norm_, spec, path);
 }
 

@@ -5,6 +5,7 @@
 #include "absl/strings/str_cat.h"
 #include "server/core/action_mapping.h"
 #include "server/core/env_batch.h"
+#include "server/core/tracking_env.h"
 
 namespace modskill::learner {
 
@@ -59,8 +60,8 @@ absl::Status TrainerConfig::Validate() const {
   if (absl::Status status = ValidateTerminationDistance(termination_distance); !status.ok()) {
     return absl::InvalidArgumentError(absl::StrCat("--", status.message()));
   }
-  if (termination_bodies != "all" && termination_bodies != "no_feet") {
-    return bad("termination_bodies", termination_bodies.substr(0, 64), "is not all or no_feet");
+  if (auto bodies = ParseTerminationBodies(termination_bodies); !bodies.ok()) {
+    return absl::InvalidArgumentError(absl::StrCat("--termination_bodies: ", bodies.status().message()));
   }
   if (curriculum_start != 0 || curriculum_end != 0) {
     if (!ValidateTerminationDistance(curriculum_start).ok() || !ValidateTerminationDistance(curriculum_end).ok()) {
@@ -78,6 +79,10 @@ absl::Status TrainerConfig::Validate() const {
 
 ActionMode ActionModeOf(const TrainerConfig& config) {
   return config.action_mode == "residual" ? ActionMode::kResidual : ActionMode::kAbsolute;
+}
+
+TerminationBodies TerminationBodiesOf(const TrainerConfig& config) {
+  return ParseTerminationBodies(config.termination_bodies).value_or(TerminationBodies::kAll);
 }
 
 std::string TrainerConfig::ToJson() const {

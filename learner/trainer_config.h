@@ -9,6 +9,10 @@
 #include "learner/model_config.h"
 #include "server/core/action_mapping.h"
 
+namespace modskill {
+enum class TerminationBodies;  // server/core/tracking_env.h
+}  // namespace modskill
+
 namespace modskill::learner {
 
 struct TrainerConfig {
@@ -80,8 +84,9 @@ struct TrainerConfig {
   std::string ToJson() const;
 };
 
-// The action mode of a validated config.
+// The action mode and the watched bodies of a validated config.
 ActionMode ActionModeOf(const TrainerConfig& config);
+TerminationBodies TerminationBodiesOf(const TrainerConfig& config);
 
 }  // namespace modskill::learner
 
