@@ -20,7 +20,7 @@
 #include "learner/ppo_loss.h"
 #include "learner/running_mean_std.h"
 #include "learner/trainer.h"
-#include "server/core/data_paths.h"
+#include "server/core/util/data_paths.h"
 #include "server/service/policy_checkpoint.h"
 #include "server/service/server_runner.h"
 

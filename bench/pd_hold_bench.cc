@@ -16,9 +16,9 @@
 
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
-#include "server/core/humanoid_state.h"
-#include "server/core/motion_library.h"
-#include "server/core/pd_controller.h"
+#include "server/core/env/humanoid_state.h"
+#include "server/core/motion/motion_library.h"
+#include "server/core/sim/pd_controller.h"
 
 ABSL_FLAG(int, poses, 40, "hanging reference poses sampled across the library");
 

@@ -36,9 +36,9 @@
 #include "absl/flags/parse.h"
 #include "absl/strings/str_cat.h"
 #include "modskill/v1/modskill.grpc.pb.h"
-#include "server/core/data_paths.h"
-#include "server/core/humanoid_spec.h"
-#include "server/core/motion_library.h"
+#include "server/core/util/data_paths.h"
+#include "server/core/sim/humanoid_spec.h"
+#include "server/core/motion/motion_library.h"
 #include "server/service/policy_checkpoint.h"
 #include "server/service/server_runner.h"
 

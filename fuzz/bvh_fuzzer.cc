@@ -1,4 +1,4 @@
-// libFuzzer target: CMU BVH (server/core/bvh_parser.cc, bvh_import.cc), through ImportMotionFile.
+// libFuzzer target: CMU BVH (server/core/motion/bvh_parser.cc, bvh_import.cc), through ImportMotionFile.
 #include <cstddef>
 #include <cstdint>
 

@@ -8,10 +8,10 @@
 #include <fstream>
 #include <string>
 
-#include "server/core/clip_name.h"
-#include "server/core/humanoid_spec.h"
-#include "server/core/motion_import.h"
-#include "server/core/resource_limits.h"
+#include "server/core/motion/clip_name.h"
+#include "server/core/sim/humanoid_spec.h"
+#include "server/core/motion/motion_import.h"
+#include "server/core/motion/resource_limits.h"
 
 namespace modskill::fuzz {
 namespace {

@@ -3,7 +3,7 @@
 #include <cstdio>
 #include <cstdlib>
 
-#include "server/core/humanoid_spec.h"
+#include "server/core/sim/humanoid_spec.h"
 
 namespace modskill::fuzz {
 namespace {

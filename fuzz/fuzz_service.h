@@ -8,9 +8,9 @@
 #include <memory>
 #include <string>
 
-#include "server/core/env_spec.h"
-#include "server/core/humanoid_model.h"
-#include "server/core/part_layout.h"
+#include "server/core/env/env_spec.h"
+#include "server/core/sim/humanoid_model.h"
+#include "server/core/sim/part_layout.h"
 
 namespace modskill::fuzz {
 

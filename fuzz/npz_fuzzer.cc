@@ -6,7 +6,7 @@
 
 #include "absl/strings/string_view.h"
 #include "fuzz/fuzz_import.h"
-#include "server/core/npz_reader.h"
+#include "server/core/motion/npz_reader.h"
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
   modskill::fuzz::InitializeImportFuzzer();

@@ -13,7 +13,7 @@
 #include "fuzz/fuzz_service.h"
 #include "google/protobuf/stubs/logging.h"
 #include "modskill/v1/modskill.pb.h"
-#include "server/core/env_batch.h"
+#include "server/core/env/env_batch.h"
 #include "server/service/session_config_validation.h"
 #include "server/service/tensor_codec.h"
 

@@ -10,7 +10,7 @@
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
-#include "server/core/env_spec.h"
+#include "server/core/env/env_spec.h"
 
 namespace modskill::learner {
 

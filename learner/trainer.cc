@@ -20,7 +20,7 @@
 #include "learner/gae.h"
 #include "learner/policy_export.h"
 #include "learner/ppo_loss.h"
-#include "server/core/tracking_env.h"
+#include "server/core/env/tracking_env.h"
 
 namespace modskill::learner {
 namespace {

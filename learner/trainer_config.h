@@ -7,10 +7,10 @@
 
 #include "absl/status/statusor.h"
 #include "learner/model_config.h"
-#include "server/core/action_mapping.h"
+#include "server/core/env/action_mapping.h"
 
 namespace modskill {
-enum class TerminationBodies;  // server/core/tracking_env.h
+enum class TerminationBodies;  // server/core/env/tracking_env.h
 }  // namespace modskill
 
 namespace modskill::learner {

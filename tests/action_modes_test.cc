@@ -8,7 +8,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "server/core/action_mapping.h"
+#include "server/core/env/action_mapping.h"
 #include "tests/test_fixtures.h"
 
 namespace modskill {

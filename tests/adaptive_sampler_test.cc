@@ -1,6 +1,6 @@
 // The adaptive clip sampler on its own: both schemes move toward failing clips and back after
 // successes, the floor holds exactly, uniform never moves.
-#include "server/core/adaptive_sampler.h"
+#include "server/core/curriculum/adaptive_sampler.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "server/core/bvh_parser.h"
+#include "server/core/motion/bvh_parser.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>

@@ -22,12 +22,12 @@
 #include "learner/policy_export.h"
 #include "learner/running_mean_std.h"
 #include "learner/skill_attention.h"
-#include "server/core/env_spec.h"
-#include "server/core/humanoid_model.h"
-#include "server/core/humanoid_spec.h"
+#include "server/core/env/env_spec.h"
+#include "server/core/sim/humanoid_model.h"
+#include "server/core/sim/humanoid_spec.h"
 #include "server/service/discriminator_scorer.h"
-#include "server/core/part_layout.h"
-#include "server/core/physics_options.h"
+#include "server/core/sim/part_layout.h"
+#include "server/core/sim/physics_options.h"
 #include "server/service/policy_checkpoint.h"
 
 namespace modskill::learner {

@@ -9,11 +9,11 @@
 #include <cstring>
 #include <string>
 
-#include "server/core/env_spec.h"
-#include "server/core/humanoid_model.h"
-#include "server/core/humanoid_spec.h"
-#include "server/core/part_layout.h"
-#include "server/core/physics_options.h"
+#include "server/core/env/env_spec.h"
+#include "server/core/sim/humanoid_model.h"
+#include "server/core/sim/humanoid_spec.h"
+#include "server/core/sim/part_layout.h"
+#include "server/core/sim/physics_options.h"
 #include "server/service/policy_checkpoint.h"
 
 namespace {

@@ -1,6 +1,6 @@
 // Tests of the motion importers (AMASS npz, CMU BVH, DeepMimic) and the native clip format:
 // round trips, AMASS semantics, resampling, grounding, kinematic consistency and bad input.
-#include "server/core/motion_import.h"
+#include "server/core/motion/motion_import.h"
 
 #include <algorithm>
 #include <cmath>
@@ -22,11 +22,11 @@
 #include "absl/strings/str_replace.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
-#include "server/core/bvh_parser.h"
-#include "server/core/clip_file.h"
-#include "server/core/humanoid_spec.h"
-#include "server/core/motion_clip.h"
-#include "server/core/rotation_math.h"
+#include "server/core/motion/bvh_parser.h"
+#include "server/core/motion/clip_file.h"
+#include "server/core/sim/humanoid_spec.h"
+#include "server/core/motion/motion_clip.h"
+#include "server/core/sim/rotation_math.h"
 #include "tests/npz_test_writer.h"
 #include "tests/test_files.h"
 #include "tests/test_fixtures.h"

@@ -8,7 +8,7 @@
 #include <gmock/gmock.h>
 #include <mujoco/mujoco.h>
 
-#include "server/core/humanoid_model.h"
+#include "server/core/sim/humanoid_model.h"
 #include "tests/test_fixtures.h"
 
 namespace modskill {

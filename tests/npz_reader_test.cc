@@ -1,4 +1,4 @@
-#include "server/core/npz_reader.h"
+#include "server/core/motion/npz_reader.h"
 
 #include <cmath>
 #include <cstdint>

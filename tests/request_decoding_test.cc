@@ -10,8 +10,8 @@
 
 #include <gtest/gtest.h>
 
-#include "server/core/humanoid_spec.h"
-#include "server/core/part_layout.h"
+#include "server/core/sim/humanoid_spec.h"
+#include "server/core/sim/part_layout.h"
 #include "server/service/policy_spec.h"
 #include "server/service/session_config_validation.h"
 

@@ -12,8 +12,8 @@
 
 #include "absl/strings/str_cat.h"
 #include "common/atomic_file.h"
-#include "server/core/humanoid_model.h"
-#include "server/core/part_layout.h"
+#include "server/core/sim/humanoid_model.h"
+#include "server/core/sim/part_layout.h"
 #include "server/service/policy_checkpoint.h"
 #include "tests/process_memory.h"
 #include "tests/server_fixture.h"

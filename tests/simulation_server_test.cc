@@ -16,7 +16,7 @@
 
 #include "absl/time/clock.h"
 #include "common/atomic_file.h"
-#include "server/core/adaptive_sampler.h"
+#include "server/core/curriculum/adaptive_sampler.h"
 #include "server/service/policy_checkpoint.h"
 #include "tests/server_fixture.h"
 

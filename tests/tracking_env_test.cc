@@ -6,7 +6,7 @@
 
 #include <gtest/gtest.h>
 
-#include "server/core/observation.h"
+#include "server/core/env/observation.h"
 #include "tests/test_fixtures.h"
 
 namespace modskill {

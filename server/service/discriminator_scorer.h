@@ -11,8 +11,8 @@
 
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
-#include "server/core/env_spec.h"
-#include "server/core/motion_clip.h"
+#include "server/core/env/env_spec.h"
+#include "server/core/motion/motion_clip.h"
 
 namespace torch::jit {
 struct Module;

@@ -11,9 +11,9 @@
 #include "absl/status/statusor.h"
 #include "absl/time/time.h"
 #include "modskill/v1/modskill.grpc.pb.h"
-#include "server/core/humanoid_spec.h"
-#include "server/core/motion_variants.h"
-#include "server/core/part_layout.h"
+#include "server/core/sim/humanoid_spec.h"
+#include "server/core/curriculum/motion_variants.h"
+#include "server/core/sim/part_layout.h"
 
 namespace modskill {
 

@@ -4,9 +4,9 @@
 
 #include "absl/strings/str_cat.h"
 #include "common/log.h"
-#include "server/core/clip_file.h"
-#include "server/core/clip_name.h"
-#include "server/core/confined_path.h"
+#include "server/core/motion/clip_file.h"
+#include "server/core/motion/clip_name.h"
+#include "server/core/util/confined_path.h"
 #include "server/service/discriminator_scorer.h"
 
 namespace modskill {

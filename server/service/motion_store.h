@@ -9,7 +9,7 @@
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
 #include "absl/synchronization/mutex.h"
-#include "server/core/motion_library.h"
+#include "server/core/motion/motion_library.h"
 
 namespace modskill {
 

@@ -10,8 +10,8 @@
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
-#include "server/core/action_mapping.h"
-#include "server/core/env_spec.h"
+#include "server/core/env/action_mapping.h"
+#include "server/core/env/env_spec.h"
 
 namespace modskill {
 

@@ -9,8 +9,8 @@
 
 #include "absl/status/status.h"
 #include "modskill/v1/modskill.pb.h"
-#include "server/core/env_batch.h"
-#include "server/core/rollout.h"
+#include "server/core/env/env_batch.h"
+#include "server/core/env/rollout.h"
 
 namespace modskill {
 

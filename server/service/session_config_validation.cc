@@ -2,8 +2,8 @@
 
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
-#include "server/core/env_batch.h"
-#include "server/core/env_spec.h"
+#include "server/core/env/env_batch.h"
+#include "server/core/env/env_spec.h"
 
 namespace modskill {
 

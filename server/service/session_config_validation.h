@@ -9,9 +9,9 @@
 
 #include "absl/status/statusor.h"
 #include "modskill/v1/modskill.pb.h"
-#include "server/core/action_mapping.h"
-#include "server/core/part_layout.h"
-#include "server/core/tracking_env.h"
+#include "server/core/env/action_mapping.h"
+#include "server/core/sim/part_layout.h"
+#include "server/core/env/tracking_env.h"
 
 namespace modskill {
 

@@ -1,0 +1,155 @@
+#include "server/core/env/env_batch.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "absl/status/status.h"
+#include "absl/strings/str_cat.h"
+#include "server/core/util/seed_mixing.h"
+
+namespace modskill {
+
+absl::Status ValidateTerminationDistance(double distance) {
+  if (!(std::isfinite(distance) && distance > 0 && distance <= kMaxTerminationDistance)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("termination_distance: ", distance, " m outside (0, ", kMaxTerminationDistance, "]"));
+  }
+  return absl::OkStatus();
+}
+
+absl::Status EnvBatch::SetTerminationDistance(double distance) {
+  if (absl::Status status = ValidateTerminationDistance(distance); !status.ok()) return status;
+  context_.config.termination_distance = distance;
+  return absl::OkStatus();
+}
+
+absl::StatusOr<std::unique_ptr<EnvBatch>> EnvBatch::Create(const EnvBatchConfig& config,
+                                                           std::shared_ptr<const MotionLibrary> motions) {
+  auto spec = HumanoidSpec::LoadDefault();
+  if (!spec.ok()) return spec.status();
+  auto humanoid = HumanoidModel::Create(*spec, config.physics);
+  if (!humanoid.ok()) return humanoid.status();
+  auto catalog = PartLayoutCatalog::LoadDefault(*spec);
+  if (!catalog.ok()) return catalog.status();
+  auto layout = catalog->Get(config.part_layout.empty() ? catalog->default_name() : config.part_layout);
+  if (!layout.ok()) return layout.status();
+  return Create(config, *std::move(humanoid), *layout, std::move(motions));
+}
+
+absl::StatusOr<std::unique_ptr<EnvBatch>> EnvBatch::Create(const EnvBatchConfig& config,
+                                                           std::shared_ptr<const HumanoidModel> humanoid,
+                                                           const PartLayout& layout,
+                                                           std::shared_ptr<const MotionLibrary> motions) {
+  if (config.num_envs < 1 || config.num_envs > 65536) {
+    return absl::InvalidArgumentError(absl::StrCat("num_envs: ", config.num_envs, " outside [1, 65536]"));
+  }
+  if (config.num_threads < 1 || config.num_threads > 256) {
+    return absl::InvalidArgumentError(absl::StrCat("num_threads: ", config.num_threads, " outside [1, 256]"));
+  }
+  if (motions == nullptr || motions->size() == 0) return absl::InvalidArgumentError("motions: the library is empty");
+  if (absl::Status status = ValidateTerminationDistance(config.env.termination_distance); !status.ok()) return status;
+  if (absl::Status status = config.env.action.Validate(); !status.ok()) return status;
+  for (int c = 0; c < motions->size(); ++c) {
+    if (motions->clip(c).num_bodies != humanoid->num_bodies()) {
+      return absl::InvalidArgumentError(absl::StrCat("motions: clip '", motions->clip(c).name, "' has ",
+                                                     motions->clip(c).num_bodies, " bodies, the humanoid ",
+                                                     humanoid->num_bodies()));
+    }
+  }
+  std::unique_ptr<EnvBatch> batch(new EnvBatch());
+  batch->context_.humanoid = std::move(humanoid);
+  batch->context_.spec = std::make_shared<const EnvSpec>(MakeEnvSpec(*batch->context_.humanoid, layout));
+  batch->context_.motions = std::move(motions);
+  batch->context_.config = config.env;
+  const std::vector<int> feet = FootBodies(batch->context_.humanoid->spec());
+  for (int b = 0; b < batch->context_.humanoid->num_bodies(); ++b) {
+    const bool foot = std::find(feet.begin(), feet.end(), b) != feet.end();
+    if (config.env.termination_bodies == TerminationBodies::kAll || !foot) batch->context_.termination_body_ids.push_back(b);
+  }
+  batch->context_.reference_amp =
+      std::make_shared<const ReferenceAmpFrames>(*batch->context_.spec, *batch->context_.motions);
+  batch->sampler_ = ClipSampler(batch->context_.motions->size());
+  batch->context_.sampler = &batch->sampler_;
+  batch->buffers_.Allocate(*batch->context_.spec, config.num_envs);
+  for (int i = 0; i < config.num_envs; ++i) {
+    batch->envs_.push_back(std::make_unique<TrackingEnv>(&batch->context_, MixSeed(config.seed * 1000003ull + i)));
+  }
+  batch->pool_ = std::make_unique<WorkerPool>(std::min(config.num_threads, config.num_envs));
+  EnvBatch* self = batch.get();
+  const int threads = batch->pool_->num_threads();
+  auto range = [self, threads](int thread, int* begin, int* end) {
+    const int n = self->num_envs();
+    *begin = static_cast<int>(static_cast<int64_t>(n) * thread / threads);
+    *end = static_cast<int>(static_cast<int64_t>(n) * (thread + 1) / threads);
+  };
+  batch->step_work_ = [self, range](int thread) {
+    int begin, end;
+    range(thread, &begin, &end);
+    const int action_size = self->spec().action_size;
+    for (int i = begin; i < end; ++i) {
+      self->envs_[i]->Step(self->pending_actions_ + static_cast<size_t>(i) * action_size, self->row(i));
+    }
+  };
+  batch->reset_work_ = [self, range](int thread) {
+    int begin, end;
+    range(thread, &begin, &end);
+    for (int i = begin; i < end; ++i) self->envs_[i]->Reset(self->row(i));
+  };
+  return batch;
+}
+
+void EnvBatch::Reset() {
+  pool_->Run(reset_work_);
+  std::fill(buffers_.done.begin(), buffers_.done.end(), 0);
+  std::fill(buffers_.truncated.begin(), buffers_.truncated.end(), 0);
+}
+
+absl::Status EnvBatch::Step(absl::Span<const float> actions) {
+  const size_t expected = static_cast<size_t>(num_envs()) * spec().action_size;
+  if (actions.size() != expected) {
+    return absl::InvalidArgumentError(absl::StrCat("actions: ", actions.size(), " values, expected ", num_envs(), " x ",
+                                                   spec().action_size, " = ", expected));
+  }
+  for (size_t k = 0; k < actions.size(); ++k) {
+    if (!std::isfinite(actions[k])) {
+      return absl::InvalidArgumentError(absl::StrCat("actions: row ", k / spec().action_size, " column ",
+                                                     k % spec().action_size, " is ", actions[k]));
+    }
+  }
+  pending_actions_ = actions.data();
+  pool_->Run(step_work_);
+  pending_actions_ = nullptr;
+  ++steps_;
+  return absl::OkStatus();
+}
+
+absl::Status EnvBatch::SetMotions(std::shared_ptr<const MotionLibrary> motions, std::vector<int> clip_ids,
+                                  std::shared_ptr<const ReferenceAmpFrames> reference_amp,
+                                  absl::Span<const double> weights) {
+  if (motions == nullptr || motions->size() == 0) return absl::InvalidArgumentError("motions: the library is empty");
+  if (reference_amp == nullptr) return absl::InvalidArgumentError("reference_amp: missing");
+  if (!clip_ids.empty() && static_cast<int>(clip_ids.size()) != motions->size()) {
+    return absl::InvalidArgumentError(absl::StrCat("clip_ids: ", clip_ids.size(), " ids for ", motions->size(), " clips"));
+  }
+  for (int c = 0; c < motions->size(); ++c) {
+    if (motions->clip(c).num_bodies != humanoid().num_bodies() || motions->clip(c).num_frames < 2) {
+      return absl::InvalidArgumentError(absl::StrCat("motions: clip '", motions->clip(c).name,
+                                                     "' does not fit the humanoid or has < 2 frames"));
+    }
+  }
+  ClipSampler sampler(motions->size());
+  if (absl::Status status = sampler.SetWeights(weights); !status.ok()) return status;
+  sampler_ = std::move(sampler);
+  context_.motions = std::move(motions);
+  context_.clip_ids = std::move(clip_ids);
+  context_.reference_amp = std::move(reference_amp);
+  return absl::OkStatus();
+}
+
+int64_t EnvBatch::physics_resets() const {
+  int64_t total = 0;
+  for (const auto& env : envs_) total += env->physics_resets();
+  return total;
+}
+
+}  // namespace modskill

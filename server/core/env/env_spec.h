@@ -1,0 +1,59 @@
+// Sizes and slices of everything an env emits, derived once from the humanoid and the part
+// layout. This is what Describe ships so that no client hard-codes a size.
+#ifndef MODSKILL_SERVER_CORE_ENV_ENV_SPEC_H_
+#define MODSKILL_SERVER_CORE_ENV_ENV_SPEC_H_
+
+#include <string>
+#include <vector>
+
+#include "server/core/sim/humanoid_model.h"
+#include "server/core/sim/part_layout.h"
+
+namespace modskill {
+
+struct Slice {
+  int start = 0;
+  int size = 0;
+};
+
+// Observation per body (PHC, heading frame), bodies in part order:
+//   self  = [local pos 3 (not for the root), rot 6, vel 3, angvel 3] (+ root height 1 for the root)
+//   task  = [dpos 3, drot 6, dvel 3, dangvel 3, ref local pos 3, ref local rot 6]
+// so a body contributes [self | task]: 15 + 24, the root 13 + 24. Total 358 + 576 = 934.
+inline constexpr int kSelfFeaturesPerBody = 15;
+inline constexpr int kSelfFeaturesRoot = 13;
+inline constexpr int kTaskFeaturesPerBody = 24;
+// AMP features per frame: root height 1, root rot 6, root vel 3, root angvel 3, joint rotations
+// 6 per non-root body, hinge velocities, key body positions 3 each. 232 for 24 bodies.
+inline constexpr int kAmpHistory = 10;
+inline const char* const kAmpKeyBodies[] = {"R_Ankle", "L_Ankle", "R_Wrist", "L_Wrist"};
+inline constexpr int kNumAmpKeyBodies = 4;
+
+// Reward terms reported separately; reward = their sum.
+enum RewardTerm { kRewardPos = 0, kRewardRot, kRewardVel, kRewardAngVel, kRewardEnergy, kNumRewardTerms };
+const char* RewardTermName(int term);
+
+struct EnvSpec {
+  PartLayout layout;
+  std::vector<int> body_order;     // spec body index at each observation position
+  std::vector<int> body_obs_start;  // per spec body: where its block starts in obs
+  std::vector<Slice> part_obs;      // per part
+  std::vector<Slice> part_action;   // per part
+  std::vector<int> action_hinge;    // per action index: hinge index (MuJoCo order)
+  std::vector<int> amp_key_bodies;  // spec body indices
+  int obs_size = 0;
+  int self_obs_size = 0;
+  int task_obs_size = 0;
+  int action_size = 0;
+  int amp_obs_per_frame = 0;
+  int amp_obs_size = 0;  // kAmpHistory frames, newest first
+  double control_dt = 0;
+  std::vector<std::string> body_names;
+  std::vector<std::string> joint_names;  // hinges in action order
+};
+
+EnvSpec MakeEnvSpec(const HumanoidModel& humanoid, const PartLayout& layout);
+
+}  // namespace modskill
+
+#endif  // MODSKILL_SERVER_CORE_ENV_ENV_SPEC_H_

@@ -1,0 +1,20 @@
+// Tracking and AMP observations (docs/DESIGN.md sections 2 and 3), written straight into a row of
+// the batch buffer. Everything is expressed in the agent's heading frame.
+#ifndef MODSKILL_SERVER_CORE_ENV_OBSERVATION_H_
+#define MODSKILL_SERVER_CORE_ENV_OBSERVATION_H_
+
+#include "server/core/env/env_spec.h"
+#include "server/core/env/humanoid_state.h"
+
+namespace modskill {
+
+// Writes spec.obs_size floats: per body in part order, [self | task] where task compares
+// `sim` with `target` (the reference at the next control step).
+void WriteTrackingObservation(const EnvSpec& spec, const HumanoidState& sim, const HumanoidState& target, float* out);
+
+// Writes spec.amp_obs_per_frame floats describing one frame of `state`.
+void WriteAmpFrame(const EnvSpec& spec, const HumanoidState& state, float* out);
+
+}  // namespace modskill
+
+#endif  // MODSKILL_SERVER_CORE_ENV_OBSERVATION_H_

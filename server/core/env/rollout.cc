@@ -1,0 +1,133 @@
+#include "server/core/env/rollout.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "absl/strings/str_cat.h"
+
+namespace modskill {
+namespace {
+
+// Body positions of one clip's rollout, frame by frame, for the sim and the reference.
+struct Trajectory {
+  std::vector<std::vector<Vec3>> sim;
+  std::vector<std::vector<Vec3>> ref;
+  double worst_mean_error = 0;
+};
+
+ClipRolloutMetrics Measure(const Trajectory& t, const std::string& name, bool success, const PartLayout& layout) {
+  ClipRolloutMetrics m;
+  m.clip = name;
+  m.success = success;
+  m.steps = static_cast<int>(t.sim.size()) - 1;
+  m.worst_mean_body_error = t.worst_mean_error;
+  const int frames = static_cast<int>(t.sim.size());
+  const int bodies = frames > 0 ? static_cast<int>(t.sim[0].size()) : 0;
+  m.body_error_mm.assign(bodies, 0.0);
+  if (frames == 0 || bodies == 0) return m;
+  for (int f = 0; f < frames; ++f) {
+    for (int b = 0; b < bodies; ++b) {
+      const double global = (t.sim[f][b] - t.ref[f][b]).norm();
+      const double local = ((t.sim[f][b] - t.sim[f][0]) - (t.ref[f][b] - t.ref[f][0])).norm();
+      m.body_error_mm[b] += 1000.0 * global / frames;
+      m.g_mpjpe_mm += 1000.0 * global / (frames * bodies);
+      m.mpjpe_mm += 1000.0 * local / (frames * bodies);
+    }
+  }
+  // Per-frame finite differences, as PHC computes E_vel and E_acc.
+  if (frames >= 2) {
+    for (int f = 0; f + 1 < frames; ++f) {
+      for (int b = 0; b < bodies; ++b) {
+        const Vec3 v_sim = t.sim[f + 1][b] - t.sim[f][b], v_ref = t.ref[f + 1][b] - t.ref[f][b];
+        m.vel_error_mm += 1000.0 * (v_sim - v_ref).norm() / ((frames - 1) * bodies);
+      }
+    }
+  }
+  if (frames >= 3) {
+    for (int f = 1; f + 1 < frames; ++f) {
+      for (int b = 0; b < bodies; ++b) {
+        const Vec3 a_sim = t.sim[f + 1][b] - 2 * t.sim[f][b] + t.sim[f - 1][b];
+        const Vec3 a_ref = t.ref[f + 1][b] - 2 * t.ref[f][b] + t.ref[f - 1][b];
+        m.acc_error_mm += 1000.0 * (a_sim - a_ref).norm() / ((frames - 2) * bodies);
+      }
+    }
+  }
+  for (const BodyPart& part : layout.parts) {
+    double sum = 0;
+    for (int b : part.bodies) sum += m.body_error_mm[b];
+    m.part_error_mm.push_back(sum / part.bodies.size());
+  }
+  return m;
+}
+
+}  // namespace
+
+absl::StatusOr<std::vector<ClipRolloutMetrics>> RunRollout(std::shared_ptr<const HumanoidModel> humanoid,
+                                                           const PartLayout& layout,
+                                                           std::shared_ptr<const MotionLibrary> motions,
+                                                           const std::vector<int>& clip_ids,
+                                                           const PolicyFunction& policy, const RolloutOptions& options,
+                                                           const RolloutFrameCallback& on_frame) {
+  if (clip_ids.empty()) return absl::InvalidArgumentError("clips: none to roll out");
+  for (int id : clip_ids) {
+    if (id < 0 || id >= motions->size()) return absl::NotFoundError(absl::StrCat("clips: no clip with index ", id));
+  }
+  EnvBatchConfig config;
+  config.num_envs = static_cast<int>(clip_ids.size());
+  config.num_threads = std::max(1, options.num_threads);
+  config.env.termination = options.termination;
+  config.env.termination_distance = options.termination_distance;
+  config.env.action = options.action;
+  config.env.max_episode_steps = options.max_steps_per_clip;
+  config.env.auto_reset = false;
+  config.physics = options.physics;
+  auto created = EnvBatch::Create(config, humanoid, layout, motions);
+  if (!created.ok()) return created.status();
+  EnvBatch& batch = **created;
+  const int n = batch.num_envs();
+  for (int i = 0; i < n; ++i) batch.env(i).ResetTo(clip_ids[i], 0, batch.row(i));
+
+  std::vector<Trajectory> trajectories(n);
+  std::vector<bool> terminated(n, false);
+  HumanoidState sim, ref;
+  sim.Resize(humanoid->num_bodies(), humanoid->num_hinges());
+  ref.Resize(humanoid->num_bodies(), humanoid->num_hinges());
+  auto record = [&](int i) {
+    const MotionClip& clip = motions->clip(clip_ids[i]);
+    ReadSimulatedState(*humanoid, batch.env(i).data(), &sim);
+    ReadReferenceState(clip, batch.env(i).frame(), &ref);
+    trajectories[i].sim.push_back(sim.body_pos);
+    trajectories[i].ref.push_back(ref.body_pos);
+    double mean = 0;
+    for (size_t b = 0; b < sim.body_pos.size(); ++b) mean += (sim.body_pos[b] - ref.body_pos[b]).norm() / sim.body_pos.size();
+    trajectories[i].worst_mean_error = std::max(trajectories[i].worst_mean_error, mean);
+    if (on_frame) on_frame(i, batch.env(i).frame(), sim.body_pos, ref.body_pos);
+  };
+  for (int i = 0; i < n; ++i) record(i);
+
+  std::vector<float> actions(static_cast<size_t>(n) * batch.spec().action_size);
+  std::vector<bool> finished(n, false);
+  int remaining = n;
+  while (remaining > 0) {
+    if (auto status = policy(batch.buffers().obs.data(), n, actions.data()); !status.ok()) return status;
+    if (auto status = batch.Step(actions); !status.ok()) {
+      return absl::InvalidArgumentError(absl::StrCat("policy output: ", status.message()));
+    }
+    for (int i = 0; i < n; ++i) {
+      if (finished[i]) continue;
+      record(i);
+      if (batch.buffers().done[i]) {
+        finished[i] = true;
+        terminated[i] = !batch.buffers().truncated[i];
+        --remaining;
+      }
+    }
+  }
+  std::vector<ClipRolloutMetrics> metrics;
+  for (int i = 0; i < n; ++i) {
+    metrics.push_back(Measure(trajectories[i], motions->clip(clip_ids[i]).name, !terminated[i], layout));
+  }
+  return metrics;
+}
+
+}  // namespace modskill

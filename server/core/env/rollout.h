@@ -1,0 +1,58 @@
+// Runs a policy on named clips from their first frame and measures how well it tracks them,
+// with the metrics of the ModSkill and PHC papers. Knows nothing of torch or gRPC: the policy
+// is a function from an observation batch to an action batch.
+#ifndef MODSKILL_SERVER_CORE_ENV_ROLLOUT_H_
+#define MODSKILL_SERVER_CORE_ENV_ROLLOUT_H_
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "server/core/env/env_batch.h"
+
+namespace modskill {
+
+struct RolloutOptions {
+  TerminationMode termination = TerminationMode::kEvaluation;
+  double termination_distance = 0.5;  // m
+  ActionMapping action;               // the one the policy was trained with
+  int max_steps_per_clip = 0;         // 0: the clip's length
+  int num_threads = 1;
+  PhysicsOptions physics;
+};
+
+// obs: [num_envs, obs_size] -> actions: [num_envs, action_size].
+using PolicyFunction = std::function<absl::Status(const float* obs, int num_envs, float* actions)>;
+
+struct ClipRolloutMetrics {
+  std::string clip;
+  bool success = false;  // never terminated
+  int steps = 0;
+  double g_mpjpe_mm = 0;    // mean global body position error
+  double mpjpe_mm = 0;      // mean root-relative body position error
+  double acc_error_mm = 0;  // mean |acceleration difference|, mm / frame^2
+  double vel_error_mm = 0;  // mean |velocity difference|, mm / frame
+  std::vector<double> body_error_mm;  // per body, global
+  std::vector<double> part_error_mm;  // per part of the layout
+  // Success at stricter termination distances: the largest mean body error seen (m).
+  double worst_mean_body_error = 0;
+};
+
+// Called for every simulated frame of every clip when set (positions in world coordinates).
+using RolloutFrameCallback =
+    std::function<void(int clip_index, int frame, const std::vector<Vec3>& sim_body_pos,
+                       const std::vector<Vec3>& ref_body_pos)>;
+
+// Rolls out every clip of `clip_ids` (indices into `motions`) in parallel envs.
+absl::StatusOr<std::vector<ClipRolloutMetrics>> RunRollout(std::shared_ptr<const HumanoidModel> humanoid,
+                                                           const PartLayout& layout,
+                                                           std::shared_ptr<const MotionLibrary> motions,
+                                                           const std::vector<int>& clip_ids,
+                                                           const PolicyFunction& policy, const RolloutOptions& options,
+                                                           const RolloutFrameCallback& on_frame = nullptr);
+
+}  // namespace modskill
+
+#endif  // MODSKILL_SERVER_CORE_ENV_ROLLOUT_H_

@@ -1,0 +1,201 @@
+#include "server/core/env/tracking_env.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include "absl/strings/str_cat.h"
+#include "server/core/env/observation.h"
+
+namespace modskill {
+
+absl::StatusOr<TerminationBodies> ParseTerminationBodies(absl::string_view name) {
+  if (name == "all") return TerminationBodies::kAll;
+  if (name == "no_feet") return TerminationBodies::kNoFeet;
+  return absl::InvalidArgumentError(absl::StrCat("'", name.substr(0, 64), "' is not all or no_feet"));
+}
+
+std::vector<std::string> TerminationBodiesNames() { return {"all", "no_feet"}; }
+
+TrackingEnv::TrackingEnv(const EnvContext* context, uint64_t seed)
+    : context_(context), data_(mj_makeData(context->humanoid->model())), pd_(*context->humanoid), rng_(seed) {
+  const int bodies = context->humanoid->num_bodies(), hinges = context->humanoid->num_hinges();
+  sim_.Resize(bodies, hinges);
+  reference_.Resize(bodies, hinges);
+  target_.Resize(bodies, hinges);
+  pd_targets_.assign(hinges, 0.0);
+  body_distance_.assign(bodies, 0.0);
+  amp_history_.assign(static_cast<size_t>(kAmpHistory) * context->spec->amp_obs_per_frame, 0.f);
+}
+
+TrackingEnv::~TrackingEnv() { mj_deleteData(data_); }
+
+void TrackingEnv::Reset(EnvRow row) {
+  const int clip = context_->sampler->Sample(rng_);
+  const int frames = context_->motions->clip(clip).num_frames;
+  // The last frame has no next target, so episodes start at most at frames - 2.
+  const int frame = context_->config.random_start_frame
+                        ? std::uniform_int_distribution<int>(0, std::max(0, frames - 2))(rng_)
+                        : 0;
+  ResetTo(clip, frame, row);
+}
+
+void TrackingEnv::ResetTo(int clip, int frame, EnvRow row) {
+  motion_ = context_->motions->shared_clip(clip);
+  const MotionClip& motion = *motion_;
+  clip_ = context_->clip_ids.empty() ? clip : context_->clip_ids[clip];
+  frame_ = std::clamp(frame, 0, motion.num_frames - 2);
+  episode_steps_ = 0;
+  finished_ = false;
+  SetSimulationToReference(*context_->humanoid, motion, frame_, data_);
+  // AMP history starts as the reference's own recent past.
+  context_->reference_amp->WriteHistory(clip, frame_, amp_history_.data());
+  amp_head_ = 0;  // the newest frame sits at amp_head_, older ones at amp_head_ + 1, + 2, ...
+  WriteObservation(row);
+}
+
+void TrackingEnv::RefreshObservation(EnvRow row) { WriteObservation(row); }
+
+bool TrackingEnv::PhysicsDiverged() const {
+  const mjModel* m = context_->humanoid->model();
+  for (int i = 0; i < m->nq; ++i) {
+    if (!std::isfinite(data_->qpos[i])) return true;
+  }
+  for (int i = 0; i < m->nv; ++i) {
+    if (!std::isfinite(data_->qvel[i]) || std::abs(data_->qvel[i]) > 1e3) return true;
+  }
+  // MuJoCo resets the state itself on a NaN or huge qpos/qvel/qacc and only leaves a warning.
+  return data_->warning[mjWARN_BADQACC].number > 0 || data_->warning[mjWARN_BADQVEL].number > 0 ||
+         data_->warning[mjWARN_BADQPOS].number > 0;
+}
+
+TrackingErrors TrackingEnv::CurrentTrackingTerms(float* terms) {
+  ReadSimulatedState(*context_->humanoid, data_, &sim_);
+  ReadReferenceState(*motion_, frame_, &reference_);
+  return ComputeImitationTerms(context_->config.reward, sim_, reference_, terms, body_distance_.data());
+}
+
+void TrackingEnv::Step(const float* action, EnvRow row) {
+  if (finished_) {
+    row.buffers->done[row.index] = 1;
+    row.buffers->reward[row.index] = 0.f;
+    return;
+  }
+  const HumanoidModel& humanoid = *context_->humanoid;
+  const EnvSpec& spec = *context_->spec;
+  const TrackingEnvConfig& config = context_->config;
+  // Residual actions displace the reference pose of the frame this step reaches.
+  const MotionClip& motion = *motion_;
+  const int next_frame = std::min(frame_ + 1, motion.num_frames - 1);
+  MapActionToPdTargets(config.action, humanoid, spec, action,
+                       &motion.dof_pos[static_cast<size_t>(next_frame) * motion.num_hinges()], pd_targets_.data());
+  const double power = pd_.Step(pd_targets_.data(), data_);
+  ++episode_steps_;
+  ++frame_;
+  const int i = row.index;
+  BatchBuffers& out = *row.buffers;
+  float* terms = &out.reward_terms[static_cast<size_t>(i) * kNumRewardTerms];
+
+  if (PhysicsDiverged()) {
+    // A blow-up ends this episode only; the other envs never see it.
+    ++physics_resets_;
+    std::fill(terms, terms + kNumRewardTerms, 0.f);
+    out.reward[i] = 0.f;
+    out.done[i] = 1;
+    out.truncated[i] = 0;
+    out.ended_clip_id[i] = clip_;
+    out.ended_frame[i] = frame_;
+    out.max_body_error[i] = std::numeric_limits<float>::infinity();
+    out.mean_body_error[i] = std::numeric_limits<float>::infinity();
+    float* part_error = &out.part_error[static_cast<size_t>(i) * out.num_parts];
+    std::fill(part_error, part_error + out.num_parts, std::numeric_limits<float>::infinity());
+    EndEpisode(row);
+    return;
+  }
+  const TrackingErrors errors = CurrentTrackingTerms(terms);
+  terms[kRewardEnergy] = episode_steps_ > config.reward.energy_free_steps
+                             ? static_cast<float>(-config.reward.energy_coefficient * power)
+                             : 0.f;
+  float reward = 0.f;
+  for (int t = 0; t < kNumRewardTerms; ++t) reward += terms[t];
+  out.reward[i] = reward;
+  out.max_body_error[i] = static_cast<float>(errors.max_body_distance);
+  out.mean_body_error[i] = static_cast<float>(errors.mean_body_distance);
+  WritePartErrors(&out.part_error[static_cast<size_t>(i) * out.num_parts]);
+
+  const bool terminated = Terminated(errors);
+  const bool truncated = !terminated && (frame_ >= motion.num_frames - 1 ||
+                                         (config.max_episode_steps > 0 && episode_steps_ >= config.max_episode_steps));
+  out.done[i] = terminated || truncated;
+  out.truncated[i] = truncated;
+  if (terminated || truncated) {
+    out.ended_clip_id[i] = clip_;
+    out.ended_frame[i] = frame_;
+    EndEpisode(row);
+    return;
+  }
+  // Push the new frame into the AMP ring.
+  const int per_frame = spec.amp_obs_per_frame;
+  amp_head_ = (amp_head_ + kAmpHistory - 1) % kAmpHistory;
+  WriteAmpFrame(spec, sim_, &amp_history_[static_cast<size_t>(amp_head_) * per_frame]);
+  WriteObservation(row);
+}
+
+bool TrackingEnv::Terminated(const TrackingErrors& errors) const {
+  const TrackingEnvConfig& config = context_->config;
+  switch (config.termination) {
+    case TerminationMode::kTraining: {
+      // Never on the first step after a reset (PHC): the state there is the reference's own.
+      if (episode_steps_ <= 1) return false;
+      double farthest = 0;
+      for (int b : context_->termination_body_ids) farthest = std::max(farthest, body_distance_[b]);
+      return farthest > config.termination_distance;
+    }
+    case TerminationMode::kEvaluation:
+      return errors.mean_body_distance > config.termination_distance;
+    case TerminationMode::kNone:
+      return false;
+  }
+  return false;
+}
+
+void TrackingEnv::WritePartErrors(float* part_error) const {
+  // body_distance_ holds this step's distances (CurrentTrackingTerms just computed them).
+  const std::vector<BodyPart>& parts = context_->spec->layout.parts;
+  for (size_t p = 0; p < parts.size(); ++p) {
+    double total = 0;
+    for (int b : parts[p].bodies) total += body_distance_[b];
+    part_error[p] = parts[p].bodies.empty() ? 0.f : static_cast<float>(total / parts[p].bodies.size());
+  }
+}
+
+void TrackingEnv::EndEpisode(EnvRow row) {
+  if (context_->config.auto_reset) {
+    Reset(row);
+  } else {
+    finished_ = true;
+  }
+}
+
+void TrackingEnv::WriteObservation(EnvRow row) {
+  const EnvSpec& spec = *context_->spec;
+  const MotionClip& motion = *motion_;
+  BatchBuffers& out = *row.buffers;
+  const int i = row.index;
+  ReadSimulatedState(*context_->humanoid, data_, &sim_);
+  ReadReferenceState(motion, std::min(frame_ + 1, motion.num_frames - 1), &target_);
+  WriteTrackingObservation(spec, sim_, target_, &out.obs[static_cast<size_t>(i) * spec.obs_size]);
+  // AMP rows are newest first.
+  float* amp = &out.amp_obs[static_cast<size_t>(i) * spec.amp_obs_size];
+  const int per_frame = spec.amp_obs_per_frame;
+  for (int k = 0; k < kAmpHistory; ++k) {
+    const int slot = (amp_head_ + k) % kAmpHistory;
+    std::memcpy(amp + static_cast<size_t>(k) * per_frame, &amp_history_[static_cast<size_t>(slot) * per_frame],
+                sizeof(float) * per_frame);
+  }
+  out.clip_id[i] = clip_;
+  out.frame[i] = frame_;
+}
+
+}  // namespace modskill

@@ -1,0 +1,138 @@
+// One humanoid tracking one reference clip: reference state initialization, PD control,
+// imitation reward, termination, truncation and automatic reset. Writes its row of the batch.
+#ifndef MODSKILL_SERVER_CORE_ENV_TRACKING_ENV_H_
+#define MODSKILL_SERVER_CORE_ENV_TRACKING_ENV_H_
+
+#include <cstdint>
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <mujoco/mujoco.h>
+
+#include "absl/status/statusor.h"
+#include "absl/strings/string_view.h"
+#include "server/core/env/action_mapping.h"
+#include "server/core/env/batch_buffers.h"
+#include "server/core/curriculum/clip_sampler.h"
+#include "server/core/env/env_spec.h"
+#include "server/core/sim/humanoid_model.h"
+#include "server/core/env/humanoid_state.h"
+#include "server/core/env/imitation_reward.h"
+#include "server/core/motion/motion_library.h"
+#include "server/core/sim/pd_controller.h"
+#include "server/core/env/reference_amp.h"
+
+namespace modskill {
+
+enum class TerminationMode {
+  kTraining,    // any body farther than `termination_distance` (0.25 m) from its reference
+  kEvaluation,  // mean body distance above `termination_distance` (0.5 m)
+  kNone,        // only truncation at the clip's end
+};
+
+// Which bodies training termination watches.
+enum class TerminationBodies {
+  kAll,
+  kNoFeet,  // every body but the ankles and toes (PHC): feet slip without the character falling
+};
+
+// "all" / "no_feet": the names flags, configs and Describe use.
+absl::StatusOr<TerminationBodies> ParseTerminationBodies(absl::string_view name);
+std::vector<std::string> TerminationBodiesNames();
+
+struct TrackingEnvConfig {
+  TerminationMode termination = TerminationMode::kTraining;
+  double termination_distance = 0.25;  // m
+  TerminationBodies termination_bodies = TerminationBodies::kAll;  // kTraining only
+  ActionMapping action;
+  ImitationRewardConfig reward;
+  int max_episode_steps = 0;  // 0: until the clip ends
+  bool random_start_frame = true;
+  // false: an ended episode keeps its final state and later steps do nothing until the next
+  // reset (rollouts and evaluation).
+  bool auto_reset = true;
+};
+
+// The shared, read-only context of a batch of envs.
+struct EnvContext {
+  std::shared_ptr<const HumanoidModel> humanoid;
+  std::shared_ptr<const EnvSpec> spec;
+  std::shared_ptr<const MotionLibrary> motions;
+  // The id an env reports for library clip i (clip_id, ended_clip_id): clip_ids[i], or i itself
+  // when empty. Sessions whose motion set changes keep ids stable while library indices move.
+  std::vector<int> clip_ids;
+  const ClipSampler* sampler = nullptr;
+  std::shared_ptr<const ReferenceAmpFrames> reference_amp;
+  TrackingEnvConfig config;
+  // The bodies training termination watches (config.termination_bodies), spec order.
+  std::vector<int> termination_body_ids;
+};
+
+// Where env i writes in a BatchBuffers.
+struct EnvRow {
+  BatchBuffers* buffers;
+  int index;
+};
+
+class TrackingEnv {
+ public:
+  TrackingEnv(const EnvContext* context, uint64_t seed);
+  ~TrackingEnv();
+  TrackingEnv(const TrackingEnv&) = delete;
+  TrackingEnv& operator=(const TrackingEnv&) = delete;
+
+  // New episode on a sampled clip and start frame; writes the row's observation.
+  void Reset(EnvRow row);
+  // New episode on library clip `clip` at `frame` (tests, rollouts).
+  void ResetTo(int clip, int frame, EnvRow row);
+  // One control step with `action` (action_size values, part order, in [-1, 1]).
+  void Step(const float* action, EnvRow row);
+
+  const mjData* data() const { return data_; }
+  mjData* mutable_data() { return data_; }
+  // The reported id of the episode's clip (see EnvContext::clip_ids).
+  int clip() const { return clip_; }
+  int frame() const { return frame_; }
+  // With auto_reset off: the episode has ended and the env waits for a reset.
+  bool finished() const { return finished_; }
+  int64_t physics_resets() const { return physics_resets_; }
+  // Reward terms and errors of the current state against the reference at the current frame.
+  TrackingErrors CurrentTrackingTerms(float* terms);
+  // Rewrites the row's observation from qpos/qvel (after external changes to the state, such
+  // as a push).
+  void RefreshObservation(EnvRow row);
+
+ private:
+  void WriteObservation(EnvRow row);
+  void EndEpisode(EnvRow row);
+  // Mean body distance per part of the layout between sim_ and reference_ (one float per part).
+  void WritePartErrors(float* part_error) const;
+  bool PhysicsDiverged() const;
+  // Whether the state just reached (sim_ against reference_) ends the episode as a failure.
+  bool Terminated(const TrackingErrors& errors) const;
+
+  const EnvContext* context_;
+  mjData* data_;
+  PdController pd_;
+  std::mt19937_64 rng_;
+  // The episode's clip, held so that the library can be replaced between steps (generated clips
+  // joining or leaving) without disturbing an episode in progress.
+  std::shared_ptr<const MotionClip> motion_;
+  int clip_ = 0;
+  int frame_ = 0;
+  int episode_steps_ = 0;
+  bool finished_ = false;
+  int64_t physics_resets_ = 0;
+  // Preallocated scratch so that Step never allocates.
+  HumanoidState sim_, reference_, target_;
+  std::vector<double> pd_targets_;
+  std::vector<double> body_distance_;  // this step's per-body distance to the reference (m)
+  std::vector<float> amp_history_;  // ring of kAmpHistory frames
+  int amp_head_ = 0;                // index of the newest frame
+};
+
+}  // namespace modskill
+
+#endif  // MODSKILL_SERVER_CORE_ENV_TRACKING_ENV_H_

@@ -1,0 +1,17 @@
+// Writes the MJCF of a humanoid from its spec, so that proportions and masses can change at run
+// time without a hand-edited XML file.
+#ifndef MODSKILL_SERVER_CORE_SIM_MJCF_BUILDER_H_
+#define MODSKILL_SERVER_CORE_SIM_MJCF_BUILDER_H_
+
+#include <string>
+
+#include "server/core/sim/humanoid_spec.h"
+#include "server/core/sim/physics_options.h"
+
+namespace modskill {
+
+std::string BuildHumanoidMjcf(const HumanoidSpec& spec, const PhysicsOptions& options);
+
+}  // namespace modskill
+
+#endif  // MODSKILL_SERVER_CORE_SIM_MJCF_BUILDER_H_

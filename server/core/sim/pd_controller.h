@@ -1,0 +1,37 @@
+// Turns PD targets into joint torques for one control step (all of its physics substeps).
+#ifndef MODSKILL_SERVER_CORE_SIM_PD_CONTROLLER_H_
+#define MODSKILL_SERVER_CORE_SIM_PD_CONTROLLER_H_
+
+#include <vector>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+#include <mujoco/mujoco.h>
+
+#include "server/core/sim/humanoid_model.h"
+
+namespace modskill {
+
+class PdController {
+ public:
+  // Preallocates everything the step needs.
+  explicit PdController(const HumanoidModel& humanoid);
+
+  // Holds `targets` (one per hinge, MuJoCo order, radians) for options.substeps physics steps.
+  // Returns the joint power sum |tau * qdot| averaged over the substeps (W).
+  double Step(const double* targets, mjData* data);
+
+ private:
+  double StepPositionImplicit(const double* targets, mjData* data);
+  double StepStablePd(const double* targets, mjData* data);
+
+  const HumanoidModel& humanoid_;
+  std::vector<mjtNum> dense_mass_;
+  Eigen::MatrixXd system_;
+  Eigen::VectorXd rhs_, acceleration_;
+  Eigen::LLT<Eigen::MatrixXd> solver_;
+};
+
+}  // namespace modskill
+
+#endif  // MODSKILL_SERVER_CORE_SIM_PD_CONTROLLER_H_

@@ -1,0 +1,25 @@
+#include "server/core/sim/physics_options.h"
+
+#include "absl/status/status.h"
+#include "absl/strings/str_cat.h"
+
+namespace modskill {
+
+absl::string_view PdModeName(PdMode mode) {
+  switch (mode) {
+    case PdMode::kPositionImplicitDamping:
+      return "position_implicit";
+    case PdMode::kStablePd:
+      return "stable_pd";
+  }
+  return "unknown";
+}
+
+absl::StatusOr<PdMode> ParsePdMode(absl::string_view name) {
+  if (name == "position_implicit") return PdMode::kPositionImplicitDamping;
+  if (name == "stable_pd") return PdMode::kStablePd;
+  return absl::InvalidArgumentError(
+      absl::StrCat("pd_mode: unknown value '", name, "' (expected position_implicit or stable_pd)"));
+}
+
+}  // namespace modskill

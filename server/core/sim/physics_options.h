@@ -1,0 +1,40 @@
+// How the humanoid is simulated: rates, PD flavour, contacts.
+#ifndef MODSKILL_SERVER_CORE_SIM_PHYSICS_OPTIONS_H_
+#define MODSKILL_SERVER_CORE_SIM_PHYSICS_OPTIONS_H_
+
+#include <string>
+
+#include "absl/status/statusor.h"
+#include "absl/strings/string_view.h"
+
+namespace modskill {
+
+enum class PdMode {
+  // MuJoCo position actuators (kp) with the PD damping (kd) as joint damping, which MuJoCo's
+  // Euler integrator treats implicitly: one mj_step per substep, nothing computed by hand.
+  kPositionImplicitDamping,
+  // Stable PD (Tan, Liu, Turk 2011): torques predicted one step ahead with the mass matrix,
+  // computed every substep and applied as generalized forces.
+  kStablePd,
+};
+
+absl::string_view PdModeName(PdMode mode);
+absl::StatusOr<PdMode> ParsePdMode(absl::string_view name);
+
+struct PhysicsOptions {
+  double control_hz = 30.0;
+  int substeps = 4;  // physics at control_hz * substeps
+  PdMode pd_mode = PdMode::kPositionImplicitDamping;
+  bool self_collision = true;  // PHC collides every pair of bodies except parent and child
+  bool fixed_root = false;     // weld the pelvis in the air (PD tests, visualization)
+  double friction = 1.0;
+  double armature = 0.01;      // PHC's joint armature; also keeps light hands stable
+  double fixed_root_height = 1.2;
+
+  double physics_dt() const { return 1.0 / (control_hz * substeps); }
+  double control_dt() const { return 1.0 / control_hz; }
+};
+
+}  // namespace modskill
+
+#endif  // MODSKILL_SERVER_CORE_SIM_PHYSICS_OPTIONS_H_
