@@ -8,7 +8,7 @@ cd "$(dirname "$0")/.."
 
 PACKAGES=(
   build-essential cmake ccache pkg-config
-  libmujoco-dev libqhull-dev libeigen3-dev libabsl-dev zlib1g-dev nlohmann-json3-dev
+  libmujoco-dev libqhull-dev libeigen3-dev libabsl-dev zlib1g-dev libzip-dev nlohmann-json3-dev
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler libtorch-dev
   libopenblas0-pthread
   libgtest-dev libgmock-dev

@@ -1,4 +1,5 @@
-// libFuzzer target: the .npz reader (zip container, inflate, .npy headers) and the AMASS importer.
+// libFuzzer target: the .npz reader (libzip's container and inflate, bounded by npz_reader.cc), the
+// .npy parser (npy_reader.cc) and the AMASS importer.
 // Inputs that start like a bare .npy go to ParseNpy; everything else is imported as an .npz.
 #include <cstddef>
 #include <cstdint>
