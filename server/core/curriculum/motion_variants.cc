@@ -303,6 +303,147 @@ void Attenuate(const std::vector<int>& sliding_frames, int half_width, std::vect
   for (int f = 0; f < frames; ++f) (*gain)[f] *= factor[f];
 }
 
+// Which bodies a variant displaces (every joint, or the part's joints; never the root), the limb
+// of each body, and the displaced legs (which get the contact handling).
+struct DisplacementPlan {
+  std::vector<bool> displaced;
+  std::vector<int> limb;
+  std::vector<int> displaced_legs;
+};
+
+DisplacementPlan PlanDisplacement(const HumanoidSpec& spec, const PartLayout& layout, int part) {
+  const int bodies = spec.num_bodies();
+  const bool whole_body = part < 0;
+  DisplacementPlan plan;
+  plan.displaced.assign(bodies, whole_body);
+  plan.displaced[0] = false;
+  if (!whole_body) {
+    for (int body : layout.parts[part].bodies) plan.displaced[body] = body != 0;
+  }
+  // Each body's limb: its ancestor among the root's children (L_Hip, R_Hip, Torso); -1 for the root.
+  plan.limb.assign(bodies, -1);
+  for (int b = 1; b < bodies; ++b) plan.limb[b] = spec.body(b).parent == 0 ? b : plan.limb[spec.body(b).parent];
+  // The displaced legs: limbs with a foot below a displaced body. A variant with any gets the
+  // contact handling.
+  for (int foot : FootBodies(spec)) {
+    bool moved = false;
+    for (int b = foot; b > 0; b = spec.body(b).parent) moved = moved || plan.displaced[b];
+    if (moved && std::find(plan.displaced_legs.begin(), plan.displaced_legs.end(), plan.limb[foot]) ==
+                     plan.displaced_legs.end()) {
+      plan.displaced_legs.push_back(plan.limb[foot]);
+    }
+  }
+  return plan;
+}
+
+// The random curves of one variant. Every curve is drawn whatever the part, so that the streams
+// do not depend on it.
+struct VariantCurves {
+  std::vector<double> warp_knots;
+  std::vector<std::vector<Vec3>> displacement_knots;  // per body
+};
+
+VariantCurves DrawCurves(const VariantOptions& options, int bodies, int k) {
+  VariantRng rng(options.seed, static_cast<uint64_t>(k));
+  VariantCurves curves;
+  curves.warp_knots.resize(options.knots);
+  for (double& w : curves.warp_knots) w = rng.Uniform(-1.0, 1.0);
+  curves.displacement_knots.resize(bodies);
+  for (int b = 1; b < bodies; ++b) {
+    curves.displacement_knots[b].resize(options.knots);
+    for (Vec3& knot : curves.displacement_knots[b]) knot = RandomDisplacementKnot(rng, options.rotation_amplitude);
+  }
+  return curves;
+}
+
+// The parent time of each variant frame: warped, or the parent's own frame times.
+Timing VariantTiming(const MotionClip& parent, double warp_amplitude, const std::vector<double>& warp_knots) {
+  std::vector<double> source_time;
+  if (warp_amplitude > 0) {
+    source_time = WarpedSourceTimes(parent, warp_amplitude, warp_knots);
+  } else {
+    source_time.resize(parent.num_frames);
+    for (int f = 0; f < parent.num_frames; ++f) source_time[f] = f / parent.fps;
+  }
+  return Timing(parent, std::move(source_time));
+}
+
+// The parent resampled at phi (the parent time of each frame). Without a warp the parent's
+// frames are copied as they are (no interpolation), so that undisplaced bodies stay
+// bit-identical.
+MotionClip ResampledBase(const MotionClip& parent, const VariantOptions& options, const std::string& token, int k,
+                         int bodies, bool warped, const Timing& timing) {
+  MotionClip base;
+  base.name = absl::StrCat(parent.name, "~", token, "~", k);
+  base.label = parent.label;
+  base.humanml3d_id = parent.humanml3d_id;
+  base.source = absl::StrCat("generated from ", parent.name, " by ", kBuiltinVariantGenerator, " (part ", token,
+                             ", seed ", options.seed, ")");
+  base.fps = parent.fps;
+  base.num_bodies = bodies;
+  base.num_frames = timing.num_frames();
+  if (warped) {
+    base.root_pos.resize(base.num_frames);
+    base.local_rot.resize(static_cast<size_t>(base.num_frames) * bodies);
+    for (int f = 0; f < base.num_frames; ++f) {
+      base.root_pos[f] = timing.Lerp(parent.root_pos, f);
+      for (int b = 0; b < bodies; ++b) {
+        base.local(f, b) = parent.local(timing.f0[f], b).slerp(timing.alpha[f], parent.local(timing.f0[f] + 1, b));
+        base.local(f, b).normalize();
+      }
+    }
+  } else {
+    base.root_pos = parent.root_pos;
+    base.local_rot = parent.local_rot;
+  }
+  return base;
+}
+
+// d(phase) per frame and displaced body.
+std::vector<Vec3> Displacements(const MotionClip& parent, const DisplacementPlan& plan, const VariantCurves& curves,
+                                const Timing& timing, int bodies) {
+  const double duration = parent.duration();
+  const int frames = timing.num_frames();
+  std::vector<Vec3> displacement(static_cast<size_t>(frames) * bodies, Vec3::Zero());
+  for (int f = 0; f < frames; ++f) {
+    for (int b = 1; b < bodies; ++b) {
+      if (plan.displaced[b]) {
+        displacement[f * bodies + b] = EvaluateKnots(curves.displacement_knots[b], timing.source_time[f] / duration);
+      }
+    }
+  }
+  return displacement;
+}
+
+// q' = q * exp(g d), back inside the hinge ranges, then the contact handling; the per-limb
+// gains g start at 1 and shrink where a displaced leg makes a foot slide.
+absl::StatusOr<MotionClip> DisplaceWithContacts(const HumanoidSpec& spec, const DisplacementPlan& plan,
+                                                const std::optional<ParentContacts>& contacts, const Timing& timing,
+                                                const MotionClip& base, const std::vector<Vec3>& displacement,
+                                                int attenuation_half_width) {
+  const int bodies = spec.num_bodies();
+  std::vector<std::vector<double>> gain(bodies, std::vector<double>(base.num_frames, 1.0));
+  MotionClip clip;
+  for (int round = 0;; ++round) {
+    clip = base;
+    for (int f = 0; f < clip.num_frames; ++f) {
+      for (int b = 1; b < bodies; ++b) {
+        if (!plan.displaced[b]) continue;
+        const Vec3 d = gain[plan.limb[b]][f] * displacement[f * bodies + b];
+        clip.local(f, b) = ClampToHingeRanges(spec.body(b), clip.local(f, b) * QuatFromRotationVector(d));
+      }
+    }
+    if (auto status = ComputeClipKinematics(spec, &clip); !status.ok()) return status;
+    if (!contacts) break;
+    if (auto status = AnchorToParentContacts(spec, *contacts, timing, &clip); !status.ok()) return status;
+    if (round == kMaxAttenuationRounds) break;
+    const std::vector<int> sliding = SlidingFrames(spec, *contacts, timing, clip);
+    if (sliding.empty()) break;
+    for (int leg : plan.displaced_legs) Attenuate(sliding, attenuation_half_width, &gain[leg]);
+  }
+  return clip;
+}
+
 }  // namespace
 
 absl::StatusOr<std::vector<MotionVariant>> GenerateVariants(const HumanoidSpec& spec, const PartLayout& layout,
@@ -311,114 +452,24 @@ absl::StatusOr<std::vector<MotionVariant>> GenerateVariants(const HumanoidSpec& 
   const int bodies = spec.num_bodies();
   const bool whole_body = options.part < 0;
   const std::string token = whole_body ? "w" : layout.parts[options.part].name;
-
-  // Which bodies get a displacement: every joint, or the part's joints; never the root.
-  std::vector<bool> displaced(bodies, whole_body);
-  displaced[0] = false;
-  if (!whole_body) {
-    for (int body : layout.parts[options.part].bodies) displaced[body] = body != 0;
-  }
-  // Each body's limb: its ancestor among the root's children (L_Hip, R_Hip, Torso); -1 for the root.
-  std::vector<int> limb(bodies, -1);
-  for (int b = 1; b < bodies; ++b) limb[b] = spec.body(b).parent == 0 ? b : limb[spec.body(b).parent];
-  // The displaced legs: limbs with a foot below a displaced body. A variant with any gets the
-  // contact handling.
-  std::vector<int> displaced_legs;
-  for (int foot : FootBodies(spec)) {
-    bool moved = false;
-    for (int b = foot; b > 0; b = spec.body(b).parent) moved = moved || displaced[b];
-    if (moved && std::find(displaced_legs.begin(), displaced_legs.end(), limb[foot]) == displaced_legs.end()) {
-      displaced_legs.push_back(limb[foot]);
-    }
-  }
+  const DisplacementPlan plan = PlanDisplacement(spec, layout, options.part);
   std::optional<ParentContacts> contacts;
-  if (!displaced_legs.empty()) contacts.emplace(spec, parent);
+  if (!plan.displaced_legs.empty()) contacts.emplace(spec, parent);
   const double warp_amplitude = whole_body ? options.time_warp_amplitude : 0.0;
   const int attenuation_half_width = std::max(1, static_cast<int>(std::lround(kAttenuationHalfWidth * parent.fps)));
 
   std::vector<MotionVariant> variants;
   variants.reserve(options.count);
   for (int k = 0; k < options.count; ++k) {
-    VariantRng rng(options.seed, static_cast<uint64_t>(k));
-    // Draw every curve whatever the part, so that the streams do not depend on it.
-    std::vector<double> warp_knots(options.knots);
-    for (double& w : warp_knots) w = rng.Uniform(-1.0, 1.0);
-    std::vector<std::vector<Vec3>> displacement_knots(bodies);
-    for (int b = 1; b < bodies; ++b) {
-      displacement_knots[b].resize(options.knots);
-      for (Vec3& knot : displacement_knots[b]) knot = RandomDisplacementKnot(rng, options.rotation_amplitude);
-    }
-
-    // The parent resampled at phi (the parent time of each frame). Without a warp the parent's
-    // frames are copied as they are (no interpolation), so that undisplaced bodies stay
-    // bit-identical.
-    MotionClip base;
-    base.name = absl::StrCat(parent.name, "~", token, "~", k);
-    base.label = parent.label;
-    base.humanml3d_id = parent.humanml3d_id;
-    base.source = absl::StrCat("generated from ", parent.name, " by ", kBuiltinVariantGenerator, " (part ", token,
-                               ", seed ", options.seed, ")");
-    base.fps = parent.fps;
-    base.num_bodies = bodies;
-    std::vector<double> source_time;
-    if (warp_amplitude > 0) {
-      source_time = WarpedSourceTimes(parent, warp_amplitude, warp_knots);
-    } else {
-      source_time.resize(parent.num_frames);
-      for (int f = 0; f < parent.num_frames; ++f) source_time[f] = f / parent.fps;
-    }
-    const Timing timing(parent, std::move(source_time));
-    base.num_frames = timing.num_frames();
-    if (warp_amplitude > 0) {
-      base.root_pos.resize(base.num_frames);
-      base.local_rot.resize(static_cast<size_t>(base.num_frames) * bodies);
-      for (int f = 0; f < base.num_frames; ++f) {
-        base.root_pos[f] = timing.Lerp(parent.root_pos, f);
-        for (int b = 0; b < bodies; ++b) {
-          base.local(f, b) = parent.local(timing.f0[f], b).slerp(timing.alpha[f], parent.local(timing.f0[f] + 1, b));
-          base.local(f, b).normalize();
-        }
-      }
-    } else {
-      base.root_pos = parent.root_pos;
-      base.local_rot = parent.local_rot;
-    }
-
-    // d(phase) per frame and displaced body.
-    const double duration = parent.duration();
-    std::vector<Vec3> displacement(static_cast<size_t>(base.num_frames) * bodies, Vec3::Zero());
-    for (int f = 0; f < base.num_frames; ++f) {
-      for (int b = 1; b < bodies; ++b) {
-        if (displaced[b]) {
-          displacement[f * bodies + b] = EvaluateKnots(displacement_knots[b], timing.source_time[f] / duration);
-        }
-      }
-    }
-
-    // q' = q * exp(g d), back inside the hinge ranges, then the contact handling; the per-limb
-    // gains g start at 1 and shrink where a displaced leg makes a foot slide.
-    std::vector<std::vector<double>> gain(bodies, std::vector<double>(base.num_frames, 1.0));
-    MotionClip clip;
-    for (int round = 0;; ++round) {
-      clip = base;
-      for (int f = 0; f < clip.num_frames; ++f) {
-        for (int b = 1; b < bodies; ++b) {
-          if (!displaced[b]) continue;
-          const Vec3 d = gain[limb[b]][f] * displacement[f * bodies + b];
-          clip.local(f, b) = ClampToHingeRanges(spec.body(b), clip.local(f, b) * QuatFromRotationVector(d));
-        }
-      }
-      if (auto status = ComputeClipKinematics(spec, &clip); !status.ok()) return status;
-      if (!contacts) break;
-      if (auto status = AnchorToParentContacts(spec, *contacts, timing, &clip); !status.ok()) return status;
-      if (round == kMaxAttenuationRounds) break;
-      const std::vector<int> sliding = SlidingFrames(spec, *contacts, timing, clip);
-      if (sliding.empty()) break;
-      for (int leg : displaced_legs) Attenuate(sliding, attenuation_half_width, &gain[leg]);
-    }
+    const VariantCurves curves = DrawCurves(options, bodies, k);
+    const Timing timing = VariantTiming(parent, warp_amplitude, curves.warp_knots);
+    const MotionClip base = ResampledBase(parent, options, token, k, bodies, warp_amplitude > 0, timing);
+    const std::vector<Vec3> displacement = Displacements(parent, plan, curves, timing, bodies);
+    auto clip = DisplaceWithContacts(spec, plan, contacts, timing, base, displacement, attenuation_half_width);
+    if (!clip.ok()) return clip.status();
 
     MotionVariant variant;
-    variant.clip = std::move(clip);
+    variant.clip = *std::move(clip);
     variant.provenance.parent = parent.name;
     variant.provenance.generator = kBuiltinVariantGenerator;
     variant.provenance.part = options.part;
