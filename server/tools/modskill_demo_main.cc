@@ -21,10 +21,61 @@ ABSL_FLAG(std::string, part_layout, "5part", "body-part layout: 5part, 3part, 2p
 ABSL_FLAG(std::string, pd_mode, "position_implicit", "position_implicit or stable_pd");
 ABSL_FLAG(uint64_t, seed, 1, "random seed");
 
-int main(int argc, char** argv) {
-  absl::SetProgramUsageMessage("steps a batch of humanoid tracking envs on the shipped motions");
-  absl::ParseCommandLine(argc, argv);
-  using namespace modskill;
+namespace modskill {
+namespace {
+
+// What the batch is: sizes, parts and physics.
+void PrintBatch(EnvBatch& envs) {
+  const EnvSpec& env_spec = envs.spec();
+  std::printf("envs %d, threads %d, obs %d (self %d + task %d), actions %d, amp obs %d, parts %d (%s), "
+              "physics %.0f Hz x %d substeps, pd %s\n",
+              envs.num_envs(), envs.num_threads(), env_spec.obs_size, env_spec.self_obs_size, env_spec.task_obs_size,
+              env_spec.action_size, env_spec.amp_obs_size, env_spec.layout.num_parts(), env_spec.layout.name.c_str(),
+              1.0 / envs.humanoid().options().physics_dt(), envs.humanoid().options().substeps,
+              std::string(PdModeName(envs.humanoid().options().pd_mode)).c_str());
+}
+
+// Steps the batch with zero or random actions and prints throughput, mean reward (per term) and
+// episode ends. Returns the exit code.
+int StepAndReport(EnvBatch& envs, const std::string& actions_mode, uint64_t seed, int steps) {
+  const EnvSpec& env_spec = envs.spec();
+  envs.Reset();
+  std::vector<float> actions(static_cast<size_t>(envs.num_envs()) * env_spec.action_size, 0.f);
+  std::mt19937 rng(static_cast<uint32_t>(seed));
+  std::uniform_real_distribution<float> uniform(-1.f, 1.f);
+  double reward_sum = 0, terms_sum[kNumRewardTerms] = {};
+  int64_t episodes = 0, terminations = 0;
+  const auto start = std::chrono::steady_clock::now();
+  for (int s = 0; s < steps; ++s) {
+    if (actions_mode == "random") {
+      for (float& a : actions) a = uniform(rng);
+    }
+    if (auto status = envs.Step(actions); !status.ok()) {
+      std::fprintf(stderr, "error: %s\n", std::string(status.message()).c_str());
+      return 1;
+    }
+    const BatchBuffers& out = envs.buffers();
+    for (int i = 0; i < envs.num_envs(); ++i) {
+      reward_sum += out.reward[i];
+      for (int t = 0; t < kNumRewardTerms; ++t) terms_sum[t] += out.reward_terms[i * kNumRewardTerms + t];
+      if (out.done[i]) {
+        ++episodes;
+        if (!out.truncated[i]) ++terminations;
+      }
+    }
+  }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double env_steps = static_cast<double>(steps) * envs.num_envs();
+  std::printf("%d steps x %d envs in %.2f s: %.0f env steps/s (%.1f x real time per env)\n", steps, envs.num_envs(),
+              seconds, env_steps / seconds, env_steps / seconds * env_spec.control_dt / envs.num_envs());
+  std::printf("mean reward %.4f [", reward_sum / env_steps);
+  for (int t = 0; t < kNumRewardTerms; ++t) std::printf("%s%s %.4f", t ? ", " : "", RewardTermName(t), terms_sum[t] / env_steps);
+  std::printf("]\nepisodes ended %lld (terminated %lld), physics resets %lld\n", static_cast<long long>(episodes),
+              static_cast<long long>(terminations), static_cast<long long>(envs.physics_resets()));
+  return 0;
+}
+
+int Main() {
   auto spec = HumanoidSpec::LoadDefault();
   if (!spec.ok()) {
     std::fprintf(stderr, "error: %s\n", std::string(spec.status().message()).c_str());
@@ -58,47 +109,15 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "error: %s\n", std::string(batch.status().message()).c_str());
     return 2;
   }
-  EnvBatch& envs = **batch;
-  const EnvSpec& env_spec = envs.spec();
-  std::printf("envs %d, threads %d, obs %d (self %d + task %d), actions %d, amp obs %d, parts %d (%s), "
-              "physics %.0f Hz x %d substeps, pd %s\n",
-              envs.num_envs(), envs.num_threads(), env_spec.obs_size, env_spec.self_obs_size, env_spec.task_obs_size,
-              env_spec.action_size, env_spec.amp_obs_size, env_spec.layout.num_parts(), env_spec.layout.name.c_str(),
-              1.0 / envs.humanoid().options().physics_dt(), envs.humanoid().options().substeps,
-              std::string(PdModeName(envs.humanoid().options().pd_mode)).c_str());
-  envs.Reset();
-  std::vector<float> actions(static_cast<size_t>(envs.num_envs()) * env_spec.action_size, 0.f);
-  std::mt19937 rng(static_cast<uint32_t>(config.seed));
-  std::uniform_real_distribution<float> uniform(-1.f, 1.f);
-  const int steps = absl::GetFlag(FLAGS_steps);
-  double reward_sum = 0, terms_sum[kNumRewardTerms] = {};
-  int64_t episodes = 0, terminations = 0;
-  const auto start = std::chrono::steady_clock::now();
-  for (int s = 0; s < steps; ++s) {
-    if (actions_mode == "random") {
-      for (float& a : actions) a = uniform(rng);
-    }
-    if (auto status = envs.Step(actions); !status.ok()) {
-      std::fprintf(stderr, "error: %s\n", std::string(status.message()).c_str());
-      return 1;
-    }
-    const BatchBuffers& out = envs.buffers();
-    for (int i = 0; i < envs.num_envs(); ++i) {
-      reward_sum += out.reward[i];
-      for (int t = 0; t < kNumRewardTerms; ++t) terms_sum[t] += out.reward_terms[i * kNumRewardTerms + t];
-      if (out.done[i]) {
-        ++episodes;
-        if (!out.truncated[i]) ++terminations;
-      }
-    }
-  }
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  const double env_steps = static_cast<double>(steps) * envs.num_envs();
-  std::printf("%d steps x %d envs in %.2f s: %.0f env steps/s (%.1f x real time per env)\n", steps, envs.num_envs(),
-              seconds, env_steps / seconds, env_steps / seconds * env_spec.control_dt / envs.num_envs());
-  std::printf("mean reward %.4f [", reward_sum / env_steps);
-  for (int t = 0; t < kNumRewardTerms; ++t) std::printf("%s%s %.4f", t ? ", " : "", RewardTermName(t), terms_sum[t] / env_steps);
-  std::printf("]\nepisodes ended %lld (terminated %lld), physics resets %lld\n", static_cast<long long>(episodes),
-              static_cast<long long>(terminations), static_cast<long long>(envs.physics_resets()));
-  return 0;
+  PrintBatch(**batch);
+  return StepAndReport(**batch, actions_mode, config.seed, absl::GetFlag(FLAGS_steps));
+}
+
+}  // namespace
+}  // namespace modskill
+
+int main(int argc, char** argv) {
+  absl::SetProgramUsageMessage("steps a batch of humanoid tracking envs on the shipped motions");
+  absl::ParseCommandLine(argc, argv);
+  return modskill::Main();
 }

@@ -12,6 +12,7 @@
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
 #include "absl/flags/usage.h"
+#include "absl/status/status.h"
 #include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
 #include "common/atomic_file.h"
@@ -65,81 +66,130 @@ ABSL_FLAG(int, max_library_clips, 10000, "clips the library may hold, shipped an
 ABSL_FLAG(std::string, save_generated, "",
           "directory: also write every generated clip that joins a session as <session>/<name>.msclip");
 
-int main(int argc, char** argv) {
-  absl::SetProgramUsageMessage("serves humanoid simulation sessions over gRPC");
-  absl::ParseCommandLine(argc, argv);
-  using namespace modskill;
-  auto fail = [](const std::string& message) {
-    std::fprintf(stderr, "error: %s\n", message.c_str());
-    return 2;
-  };
+namespace modskill {
+namespace {
+
+// Every flag check fails with a status whose message is what the server prints.
+absl::Status Invalid(const std::string& message) { return absl::InvalidArgumentError(message); }
+
+// The per-clip and per-upload limits of every importer, set before the library loads and any
+// thread starts.
+absl::Status ApplyResourceLimits() {
   ResourceLimits limits;
   limits.max_clip_frames = absl::GetFlag(FLAGS_max_clip_frames);
   limits.max_decompressed_bytes = absl::GetFlag(FLAGS_max_decompressed_bytes);
   limits.max_npz_member_bytes = std::min(limits.max_npz_member_bytes, limits.max_decompressed_bytes);
   limits.max_name_length = absl::GetFlag(FLAGS_max_name_length);
-  if (limits.max_clip_frames < 2) return fail("--max_clip_frames must be >= 2");
-  if (limits.max_decompressed_bytes < 1) return fail("--max_decompressed_bytes must be >= 1");
-  if (limits.max_name_length < 1) return fail("--max_name_length must be >= 1");
-  SetDefaultResourceLimits(limits);  // before the library loads and any thread starts
-  ServerOptions options;
+  if (limits.max_clip_frames < 2) return Invalid("--max_clip_frames must be >= 2");
+  if (limits.max_decompressed_bytes < 1) return Invalid("--max_decompressed_bytes must be >= 1");
+  if (limits.max_name_length < 1) return Invalid("--max_name_length must be >= 1");
+  SetDefaultResourceLimits(limits);
+  return absl::OkStatus();
+}
+
+// Where the server listens and how much it takes on: messages, sessions, envs, uploads, physics.
+absl::Status ReadNetworkAndCapacity(ServerOptions& options) {
   options.bind = absl::GetFlag(FLAGS_bind);
   options.port = absl::GetFlag(FLAGS_port);
   options.tls_cert_file = absl::GetFlag(FLAGS_tls_cert);
   options.tls_key_file = absl::GetFlag(FLAGS_tls_key);
-  if (absl::GetFlag(FLAGS_max_message_mb) < 1) return fail("--max_message_mb must be >= 1");
+  if (absl::GetFlag(FLAGS_max_message_mb) < 1) return Invalid("--max_message_mb must be >= 1");
   options.max_message_bytes = int64_t{absl::GetFlag(FLAGS_max_message_mb)} << 20;
   options.service.threads_per_session = absl::GetFlag(FLAGS_threads);
   options.service.max_sessions = absl::GetFlag(FLAGS_max_sessions);
   options.service.max_envs_per_session = absl::GetFlag(FLAGS_max_envs_per_session);
   options.service.max_upload_bytes = int64_t{absl::GetFlag(FLAGS_max_upload_mb)} << 20;
-  if (options.service.threads_per_session < 1) return fail("--threads must be >= 1");
-  if (options.service.max_sessions < 1) return fail("--max_sessions must be >= 1");
-  if (options.service.max_envs_per_session < 1) return fail("--max_envs_per_session must be >= 1");
+  if (options.service.threads_per_session < 1) return Invalid("--threads must be >= 1");
+  if (options.service.max_sessions < 1) return Invalid("--max_sessions must be >= 1");
+  if (options.service.max_envs_per_session < 1) return Invalid("--max_envs_per_session must be >= 1");
   auto pd_mode = ParsePdMode(absl::GetFlag(FLAGS_pd_mode));
-  if (!pd_mode.ok()) return fail(std::string(pd_mode.status().message()));
+  if (!pd_mode.ok()) return Invalid(std::string(pd_mode.status().message()));
   options.service.physics.pd_mode = *pd_mode;
+  return absl::OkStatus();
+}
+
+// The curriculum: how sessions sample clips and when and how they generate variants.
+absl::Status ReadCurriculum(ServiceOptions& service) {
   auto sampling = ParseSamplingScheme(absl::GetFlag(FLAGS_sampling));
-  if (!sampling.ok()) return fail(absl::StrCat("--", sampling.status().message()));
-  options.service.sampling = absl::GetFlag(FLAGS_no_adaptive) ? SamplingScheme::kUniform : *sampling;
-  options.service.sampling_floor = absl::GetFlag(FLAGS_sampling_floor);
-  if (absl::Status status = ValidateSamplingParameters(options.service.sampling_floor, kDefaultSamplingDecay,
+  if (!sampling.ok()) return Invalid(absl::StrCat("--", sampling.status().message()));
+  service.sampling = absl::GetFlag(FLAGS_no_adaptive) ? SamplingScheme::kUniform : *sampling;
+  service.sampling_floor = absl::GetFlag(FLAGS_sampling_floor);
+  if (absl::Status status = ValidateSamplingParameters(service.sampling_floor, kDefaultSamplingDecay,
                                                        "--sampling_floor");
       !status.ok()) {
-    return fail(std::string(status.message()));
+    return Invalid(std::string(status.message()));
   }
-  GenerationOptions& generation = options.service.generation;
+  GenerationOptions& generation = service.generation;
   generation.enabled = !absl::GetFlag(FLAGS_no_generative);
   generation.variants_per_round = absl::GetFlag(FLAGS_variants_per_failure);
   generation.max_generated_clips = absl::GetFlag(FLAGS_max_generated_clips);
   generation.failures_per_round = absl::GetFlag(FLAGS_failures_per_round);
-  if (absl::Status status = ValidateGenerationOptions(generation); !status.ok()) return fail(std::string(status.message()));
-  options.service.generator_address = absl::GetFlag(FLAGS_generator);
-  if (absl::GetFlag(FLAGS_generator_timeout_ms) < 1) return fail("--generator_timeout_ms must be >= 1");
-  options.service.generator_timeout = absl::Milliseconds(absl::GetFlag(FLAGS_generator_timeout_ms));
-  options.service.generated_clip_dir = absl::GetFlag(FLAGS_save_generated);
-  options.service.max_saved_generated_clips = absl::GetFlag(FLAGS_max_saved_generated_clips);
-  options.service.max_library_clips = absl::GetFlag(FLAGS_max_library_clips);
-  if (options.service.max_saved_generated_clips < 0) return fail("--max_saved_generated_clips must be >= 0");
-  if (options.service.max_library_clips < 1) return fail("--max_library_clips must be >= 1");
+  if (absl::Status status = ValidateGenerationOptions(generation); !status.ok()) {
+    return Invalid(std::string(status.message()));
+  }
+  service.generator_address = absl::GetFlag(FLAGS_generator);
+  if (absl::GetFlag(FLAGS_generator_timeout_ms) < 1) return Invalid("--generator_timeout_ms must be >= 1");
+  service.generator_timeout = absl::Milliseconds(absl::GetFlag(FLAGS_generator_timeout_ms));
+  service.generated_clip_dir = absl::GetFlag(FLAGS_save_generated);
+  service.max_saved_generated_clips = absl::GetFlag(FLAGS_max_saved_generated_clips);
+  service.max_library_clips = absl::GetFlag(FLAGS_max_library_clips);
+  if (service.max_saved_generated_clips < 0) return Invalid("--max_saved_generated_clips must be >= 0");
+  if (service.max_library_clips < 1) return Invalid("--max_library_clips must be >= 1");
+  return absl::OkStatus();
+}
+
+// Who may call and which checkpoint files a Rollout may name.
+absl::Status ReadAccess(ServiceOptions& service) {
   for (const std::string& directory : absl::GetFlag(FLAGS_checkpoint_dir)) {
     std::error_code error;
     if (!std::filesystem::is_directory(directory, error)) {
-      return fail(absl::StrCat("--checkpoint_dir: ", directory, " is not a directory"));
+      return Invalid(absl::StrCat("--checkpoint_dir: ", directory, " is not a directory"));
     }
-    options.service.checkpoint_dirs.push_back(directory);
+    service.checkpoint_dirs.push_back(directory);
   }
   if (!absl::GetFlag(FLAGS_auth_token_file).empty()) {
     auto token = ReadFileToString(absl::GetFlag(FLAGS_auth_token_file), 4096);
-    if (!token.ok()) return fail(absl::StrCat("--auth_token_file: ", token.status().message()));
-    options.service.auth_token = std::string(absl::StripAsciiWhitespace(*token));
-    if (options.service.auth_token.empty()) return fail("--auth_token_file: the file is empty");
+    if (!token.ok()) return Invalid(absl::StrCat("--auth_token_file: ", token.status().message()));
+    service.auth_token = std::string(absl::StripAsciiWhitespace(*token));
+    if (service.auth_token.empty()) return Invalid("--auth_token_file: the file is empty");
   }
+  return absl::OkStatus();
+}
+
+// The one line that says the server is up and how it is configured.
+void LogListening(const ServerOptions& options, int port, int num_clips, const std::string& motion_dir) {
+  const GenerationOptions& generation = options.service.generation;
+  LogLine("modskill-server listening on %s:%d (%s%s), %d clips from %s, %d threads per session, %s sampling "
+          "(floor %g), generative resampling %s",
+          options.bind, port, options.tls_cert_file.empty() ? "insecure" : "TLS",
+          options.service.auth_token.empty() ? "" : ", token auth", num_clips, motion_dir,
+          options.service.threads_per_session, SamplingSchemeName(options.service.sampling),
+          options.service.sampling_floor,
+          !generation.enabled ? std::string("off")
+          : absl::StrCat(generation.variants_per_round, " variants per round, cap ",
+                         generation.max_generated_clips < 0 ? std::string("= the session's clips")
+                                                            : absl::StrCat(generation.max_generated_clips),
+                         options.service.generator_address.empty()
+                             ? std::string(", built-in generator")
+                             : absl::StrCat(", generator ", options.service.generator_address)));
+}
+
+int Fail(const std::string& message) {
+  std::fprintf(stderr, "error: %s\n", message.c_str());
+  return 2;
+}
+
+int Main() {
+  if (absl::Status status = ApplyResourceLimits(); !status.ok()) return Fail(std::string(status.message()));
+  ServerOptions options;
+  if (absl::Status status = ReadNetworkAndCapacity(options); !status.ok()) return Fail(std::string(status.message()));
+  if (absl::Status status = ReadCurriculum(options.service); !status.ok()) return Fail(std::string(status.message()));
+  if (absl::Status status = ReadAccess(options.service); !status.ok()) return Fail(std::string(status.message()));
   auto spec = HumanoidSpec::LoadDefault();
-  if (!spec.ok()) return fail(std::string(spec.status().message()));
+  if (!spec.ok()) return Fail(std::string(spec.status().message()));
   const std::string motion_dir = absl::GetFlag(FLAGS_motions).empty() ? DataPath("motions") : absl::GetFlag(FLAGS_motions);
   auto library = MotionLibrary::LoadDirectory(motion_dir, *spec);
-  if (!library.ok()) return fail(absl::StrCat("--motions: ", library.status().message()));
+  if (!library.ok()) return Fail(absl::StrCat("--motions: ", library.status().message()));
   // One intra-op thread: rollout batches are small and sessions already use --threads.
   SetTorchThreads(1);
 
@@ -152,20 +202,8 @@ int main(int argc, char** argv) {
 
   const int num_clips = library->size();
   auto server = StartServer(options, std::make_shared<const MotionLibrary>(*std::move(library)));
-  if (!server.ok()) return fail(std::string(server.status().message()));
-  LogLine("modskill-server listening on %s:%d (%s%s), %d clips from %s, %d threads per session, %s sampling "
-          "(floor %g), generative resampling %s",
-          options.bind, (*server)->port(), options.tls_cert_file.empty() ? "insecure" : "TLS",
-          options.service.auth_token.empty() ? "" : ", token auth", num_clips, motion_dir,
-          options.service.threads_per_session, SamplingSchemeName(options.service.sampling),
-          options.service.sampling_floor,
-          !generation.enabled ? std::string("off")
-          : absl::StrCat(generation.variants_per_round, " variants per round, cap ",
-                         generation.max_generated_clips < 0 ? std::string("= the session's clips")
-                                                            : absl::StrCat(generation.max_generated_clips),
-                         options.service.generator_address.empty()
-                             ? std::string(", built-in generator")
-                             : absl::StrCat(", generator ", options.service.generator_address)));
+  if (!server.ok()) return Fail(std::string(server.status().message()));
+  LogListening(options, (*server)->port(), num_clips, motion_dir);
   std::fflush(stderr);
   int signal_number = 0;
   sigwait(&signals, &signal_number);
@@ -174,4 +212,13 @@ int main(int argc, char** argv) {
   (*server)->Wait();
   LogLine("stopped");
   return 0;
+}
+
+}  // namespace
+}  // namespace modskill
+
+int main(int argc, char** argv) {
+  absl::SetProgramUsageMessage("serves humanoid simulation sessions over gRPC");
+  absl::ParseCommandLine(argc, argv);
+  return modskill::Main();
 }
