@@ -1,0 +1,73 @@
+// What the gRPC server's end-to-end tests share: a server on a free port (3 sessions of at most
+// 64 envs, no generative resampling) with a client, a session config, a scratch directory, and a
+// raw request sequence for what the client library would refuse to send.
+#ifndef MODSKILL_TESTS_SIMULATION_SERVER_FIXTURE_H_
+#define MODSKILL_TESTS_SIMULATION_SERVER_FIXTURE_H_
+
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <gmock/gmock.h>
+
+#include "absl/strings/str_cat.h"
+#include "absl/time/clock.h"
+#include "tests/server_fixture.h"
+
+namespace modskill {
+
+inline v1::SessionConfig Config(int envs, uint64_t seed = 1) {
+  v1::SessionConfig config;
+  config.set_num_envs(envs);
+  config.set_seed(seed);
+  return config;
+}
+
+inline std::string TempDir() {
+  const std::string dir = std::string(MODSKILL_TEST_TMP_DIR) + "/server";
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+// Sends a raw request sequence and returns the stream's final status.
+inline grpc::Status RawSimulate(const RunningServer& server, const std::vector<v1::SimulateRequest>& requests) {
+  auto channel = grpc::CreateChannel(absl::StrCat("127.0.0.1:", server.port()), grpc::InsecureChannelCredentials());
+  auto stub = v1::Simulation::NewStub(channel);
+  grpc::ClientContext context;
+  auto stream = stub->Simulate(&context);
+  v1::SimulateResponse response;
+  for (const auto& request : requests) {
+    if (!stream->Write(request)) break;
+    if (!stream->Read(&response)) break;
+  }
+  stream->WritesDone();
+  while (stream->Read(&response)) {
+  }
+  return stream->Finish();
+}
+
+class SimulationServerTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    ServerOptions options;
+    options.service.max_sessions = 3;
+    options.service.max_envs_per_session = 64;
+    options.service.max_upload_bytes = 1 << 20;
+    // Generative resampling has its own tests (generative_resampling_test.cc); here clip sets stay fixed.
+    options.service.generation.enabled = false;
+    options.service.checkpoint_dirs = {TempDir()};  // where ZeroPolicy() writes
+    server_ = StartTestServer(options);
+    ASSERT_NE(server_, nullptr);
+    client_ = ConnectTo(*server_);
+    ASSERT_NE(client_, nullptr);
+  }
+  void TearDown() override { server_->Shutdown(absl::Seconds(1)); }
+
+  std::unique_ptr<RunningServer> server_;
+  std::unique_ptr<SimulationClient> client_;
+};
+
+}  // namespace modskill
+
+#endif  // MODSKILL_TESTS_SIMULATION_SERVER_FIXTURE_H_
