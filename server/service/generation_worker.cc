@@ -78,9 +78,20 @@ void GenerationWorker::Run() {
 }
 
 void GenerationWorker::RunRound(SimulationSession& session, const GenerationRequest& request) {
+  GenerationCounters counters;
+  std::vector<MotionVariant> candidates = GenerateCandidates(session, request, counters);
+  std::vector<MotionVariant> accepted = FilterCandidates(session, request, std::move(candidates), counters);
+  const std::vector<std::shared_ptr<const MotionClip>> added =
+      session.CommitRound(request.parent->name, std::move(accepted), counters);
+  if (save_dir_.empty()) return;
+  SaveGenerated(session, added);
+}
+
+std::vector<MotionVariant> GenerationWorker::GenerateCandidates(SimulationSession& session,
+                                                                const GenerationRequest& request,
+                                                                GenerationCounters& counters) {
   const PartLayout& layout = session.batch->spec().layout;
   const MotionClip& parent = *request.parent;
-  GenerationCounters counters;
   absl::StatusOr<std::vector<MotionVariant>> candidates = absl::UnavailableError("no external generator");
   if (external_ != nullptr) {
     candidates = external_->Generate(*spec_, layout, parent, request.part, request.seed, request.count);
@@ -104,11 +115,18 @@ void GenerationWorker::RunRound(SimulationSession& session, const GenerationRequ
       candidates = std::vector<MotionVariant>();
     }
   }
+  return *std::move(candidates);
+}
+
+std::vector<MotionVariant> GenerationWorker::FilterCandidates(SimulationSession& session,
+                                                              const GenerationRequest& request,
+                                                              std::vector<MotionVariant> candidates,
+                                                              GenerationCounters& counters) {
   // With the learner's discriminator, ModSkill's rule too: a mean score >= 0.5 on 30 random frames.
   const std::shared_ptr<const DiscriminatorScorer> discriminator = session.discriminator();
   std::vector<MotionVariant> accepted;
-  for (size_t k = 0; k < candidates->size(); ++k) {
-    MotionVariant& variant = (*candidates)[k];
+  for (size_t k = 0; k < candidates.size(); ++k) {
+    MotionVariant& variant = candidates[k];
     std::vector<float> scores;
     if (discriminator != nullptr) {
       auto scored = discriminator->ScoreClip(session.batch->spec(), variant.clip, kDiscriminatorFrames,
@@ -120,7 +138,7 @@ void GenerationWorker::RunRound(SimulationSession& session, const GenerationRequ
       }
     }
     // A failed scoring leaves `scores` empty, which the discriminator check rejects.
-    const PlausibilityVerdict verdict = CheckVariantPlausibility(*spec_, variant.clip, parent, filter_,
+    const PlausibilityVerdict verdict = CheckVariantPlausibility(*spec_, variant.clip, *request.parent, filter_,
                                                                  discriminator != nullptr ? &scores : nullptr);
     if (verdict.accepted) {
       accepted.push_back(std::move(variant));
@@ -129,9 +147,11 @@ void GenerationWorker::RunRound(SimulationSession& session, const GenerationRequ
     ++counters.rejected;
     ++counters.rejected_by_check[verdict.reason.substr(0, verdict.reason.find(':'))];
   }
-  const std::vector<std::shared_ptr<const MotionClip>> added =
-      session.CommitRound(parent.name, std::move(accepted), counters);
-  if (save_dir_.empty()) return;
+  return accepted;
+}
+
+void GenerationWorker::SaveGenerated(const SimulationSession& session,
+                                     const std::vector<std::shared_ptr<const MotionClip>>& added) {
   for (const auto& clip : added) {
     if (saved_ >= max_saved_) {
       if (saved_++ == max_saved_) {

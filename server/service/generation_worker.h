@@ -44,7 +44,16 @@ class GenerationWorker {
     GenerationRequest request;
   };
   void Run();
+  // One round: generate candidates, keep the plausible ones, commit them, save what joined.
   void RunRound(SimulationSession& session, const GenerationRequest& request);
+  // The external generator's variants, or the built-in generator's (none if both fail).
+  std::vector<MotionVariant> GenerateCandidates(SimulationSession& session, const GenerationRequest& request,
+                                                GenerationCounters& counters);
+  // The candidates that pass the plausibility filter (and the session's discriminator, if any).
+  std::vector<MotionVariant> FilterCandidates(SimulationSession& session, const GenerationRequest& request,
+                                              std::vector<MotionVariant> candidates, GenerationCounters& counters);
+  // Writes the clips that joined the session under --save_generated, up to max_saved_ in all.
+  void SaveGenerated(const SimulationSession& session, const std::vector<std::shared_ptr<const MotionClip>>& added);
 
   const HumanoidSpec* spec_;
   const std::unique_ptr<ExternalMotionGenerator> external_;
