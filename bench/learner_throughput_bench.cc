@@ -93,12 +93,8 @@ void NetworkThroughput(const std::string& preset, const NetworkLayout& layout) {
   }
 }
 
-int Run() {
-  SetTorchThreads(1);
-  auto spec = HumanoidSpec::LoadDefault();
-  auto humanoid = HumanoidModel::Create(*spec, PhysicsOptions());
-  auto catalog = PartLayoutCatalog::LoadDefault(*spec);
-  const NetworkLayout layout = LayoutFromEnvSpec(MakeEnvSpec(**humanoid, *catalog->Get("5part")));
+// The networks alone, with one and two torch threads.
+void NetworksAlone(const NetworkLayout& layout) {
   for (int threads : {1, 2}) {
     if (!absl::GetFlag(FLAGS_networks)) break;
     SetTorchThreads(threads);
@@ -107,17 +103,11 @@ int Run() {
     NetworkThroughput("small", layout);
     if (absl::GetFlag(FLAGS_paper)) NetworkThroughput("paper", layout);
   }
-  SetTorchThreads(1);
+}
 
-  auto library = MotionLibrary::LoadDefault(*spec);
-  ServerOptions options;
-  options.port = 0;
-  options.service.threads_per_session = 1;  // two sessions of 128: one thread each, two cores
-  auto server = StartServer(options, std::make_shared<const MotionLibrary>(*std::move(library)));
-  if (!server.ok()) return std::fprintf(stderr, "error: %s\n", std::string(server.status().message()).c_str()), 1;
-  const std::string address = absl::StrCat("127.0.0.1:", (*server)->port());
-
-  // The server alone: two sessions of 128 envs stepped back to back with zero actions.
+// The server alone: two sessions of 128 envs stepped back to back with zero actions for 10 s;
+// env steps per second.
+double ServerAlone(const std::string& address) {
   ClientOptions client_options;
   client_options.server = address;
   auto client = SimulationClient::Connect(client_options);
@@ -141,7 +131,11 @@ int Run() {
   const double alone = alone_steps / std::chrono::duration<double>(Clock::now() - alone_start).count();
   (void)(*first)->Close();
   (void)(*second)->Close();
+  return alone;
+}
 
+// The small preset on 256 envs of the server at `address`, with the flags' overrides.
+TrainerConfig EndToEndConfig(const std::string& address) {
   TrainerConfig config = *TrainerConfig::ForPreset("small");
   config.servers = {address};
   config.envs_per_server = 256;
@@ -157,11 +151,12 @@ int Run() {
     config.amp_reward_weight = absl::GetFlag(FLAGS_amp_reward_weight);
     config.task_reward_weight = 1 - config.amp_reward_weight;
   }
-  std::printf("\nend to end, 256 envs (2 sessions of 128, 1 server thread each), small preset, %d iterations of %d steps:\n",
-              config.iterations, 256 * config.horizon);
-  std::printf("  server alone (zero actions over gRPC):  %7.0f env steps/s\n", alone);
-  // The modes one after the other on the same server; the first iteration of each (networks
-  // warming up, no collection yet running during an update) is not counted.
+  return config;
+}
+
+// The modes one after the other on the same server; the first iteration of each (networks
+// warming up, no collection yet running during an update) is not counted. Returns the exit code.
+int MeasureModes(TrainerConfig config, double alone) {
   for (const std::string& mode : absl::GetFlag(FLAGS_modes)) {
     if (mode != "sequential" && mode != "during_update") {
       return std::fprintf(stderr, "error: --modes: unknown mode '%s'\n", mode.c_str()), 2;
@@ -181,6 +176,32 @@ int Run() {
                 mode == "sequential" ? "then update:" : "during update:", Median(rates), Median(rates) / alone,
                 Median(collect), Median(update));
   }
+  return 0;
+}
+
+int Run() {
+  SetTorchThreads(1);
+  auto spec = HumanoidSpec::LoadDefault();
+  auto humanoid = HumanoidModel::Create(*spec, PhysicsOptions());
+  auto catalog = PartLayoutCatalog::LoadDefault(*spec);
+  v1::EnvSpec wire_spec;
+  ToProto(MakeEnvSpec(**humanoid, *catalog->Get("5part")), **humanoid, &wire_spec);
+  NetworksAlone(LayoutFromWireSpec(wire_spec));
+  SetTorchThreads(1);
+
+  auto library = MotionLibrary::LoadDefault(*spec);
+  ServerOptions options;
+  options.port = 0;
+  options.service.threads_per_session = 1;  // two sessions of 128: one thread each, two cores
+  auto server = StartServer(options, std::make_shared<const MotionLibrary>(*std::move(library)));
+  if (!server.ok()) return std::fprintf(stderr, "error: %s\n", std::string(server.status().message()).c_str()), 1;
+  const std::string address = absl::StrCat("127.0.0.1:", (*server)->port());
+  const double alone = ServerAlone(address);
+  const TrainerConfig config = EndToEndConfig(address);
+  std::printf("\nend to end, 256 envs (2 sessions of 128, 1 server thread each), small preset, %d iterations of %d steps:\n",
+              config.iterations, 256 * config.horizon);
+  std::printf("  server alone (zero actions over gRPC):  %7.0f env steps/s\n", alone);
+  if (int code = MeasureModes(config, alone); code != 0) return code;
   (*server)->Shutdown(absl::Seconds(1));
   return 0;
 }

@@ -149,9 +149,11 @@ absl::StatusOr<std::vector<int64_t>> ParseMilestones(const std::vector<std::stri
   return steps;
 }
 
-int RunTraining(const std::string& token) {
+// The trainer's configuration from --preset and the flags that override it; every error is a
+// usage error.
+absl::StatusOr<TrainerConfig> ConfigFromFlags(const std::string& token) {
   auto config = TrainerConfig::ForPreset(absl::GetFlag(FLAGS_preset));
-  if (!config.ok()) return Fail(absl::StrCat("--preset: ", config.status().message()), 2);
+  if (!config.ok()) return absl::InvalidArgumentError(absl::StrCat("--preset: ", config.status().message()));
   config->servers = absl::GetFlag(FLAGS_servers);
   config->token = token;
   config->tls_ca_file = absl::GetFlag(FLAGS_tls_ca);
@@ -170,7 +172,7 @@ int RunTraining(const std::string& token) {
   if (absl::GetFlag(FLAGS_learning_rate) > 0) config->learning_rate = absl::GetFlag(FLAGS_learning_rate);
   if (absl::GetFlag(FLAGS_log_std) != 0) config->model.log_std = absl::GetFlag(FLAGS_log_std);
   const double amp_weight = absl::GetFlag(FLAGS_amp_reward_weight);
-  if (!(amp_weight >= 0 && amp_weight <= 1)) return Fail("--amp_reward_weight must be in [0, 1]", 2);
+  if (!(amp_weight >= 0 && amp_weight <= 1)) return absl::InvalidArgumentError("--amp_reward_weight must be in [0, 1]");
   config->amp_reward_weight = amp_weight;
   config->task_reward_weight = 1 - amp_weight;
   if (!absl::GetFlag(FLAGS_action_mode).empty()) config->action_mode = absl::GetFlag(FLAGS_action_mode);
@@ -181,7 +183,8 @@ int RunTraining(const std::string& token) {
     const std::vector<std::string> ends = absl::StrSplit(curriculum, ':');
     if (ends.size() != 2 || !absl::SimpleAtod(ends[0], &config->curriculum_start) ||
         !absl::SimpleAtod(ends[1], &config->curriculum_end)) {
-      return Fail(absl::StrCat("--termination_curriculum: '", curriculum.substr(0, 64), "' is not START:END in m"), 2);
+      return absl::InvalidArgumentError(
+          absl::StrCat("--termination_curriculum: '", curriculum.substr(0, 64), "' is not START:END in m"));
     }
   }
   config->update_threads = absl::GetFlag(FLAGS_update_threads);
@@ -191,83 +194,129 @@ int RunTraining(const std::string& token) {
   config->report_every = absl::GetFlag(FLAGS_report_every);
   config->resume = absl::GetFlag(FLAGS_resume);
   config->server_timeout_s = absl::GetFlag(FLAGS_server_timeout_s);
-  if (absl::Status status = config->Validate(); !status.ok()) return Fail(std::string(status.message()), 2);
+  if (absl::Status status = config->Validate(); !status.ok()) return status;
+  return config;
+}
 
+// The columns of progress.csv (and, from the third on, the TensorBoard scalars), in row order.
+const std::vector<std::string>& ProgressColumns() {
+  static const std::vector<std::string> columns = {
+      "iteration", "env_steps", "env_steps_per_second", "mean_task_reward", "mean_amp_reward", "episode_return",
+      "episode_length", "reward_pos", "reward_rot", "reward_vel", "reward_ang_vel", "reward_energy", "policy_loss",
+      "value_loss", "approx_kl", "clip_fraction", "discriminator_loss", "expert_logit", "policy_logit",
+      "gradient_penalty", "live_sessions", "wall_seconds", "termination_distance", "tracked_share",
+      "collect_seconds", "update_seconds", "policy_lag"};
+  return columns;
+}
+
+// One iteration's figures in ProgressColumns() order.
+std::vector<double> ProgressRow(const IterationStats& s, double elapsed) {
+  return {double(s.iteration), double(s.env_steps), s.env_steps_per_second, s.mean_task_reward, s.mean_amp_reward,
+          s.mean_episode_return, s.mean_episode_length, s.reward_terms[0], s.reward_terms[1], s.reward_terms[2],
+          s.reward_terms[3], s.reward_terms[4], s.policy_loss, s.value_loss, s.approx_kl, s.clip_fraction,
+          s.discriminator_loss, s.expert_logit, s.policy_logit, s.gradient_penalty, double(s.live_sessions), elapsed,
+          s.termination_distance, s.tracked_share, s.collect_seconds, s.update_seconds, double(s.policy_lag)};
+}
+
+// One iteration's line on stdout; `left`: the estimated seconds to the end of the run.
+void PrintIteration(const IterationStats& s, int last, double left) {
+  std::printf(
+      "it %4d/%d | %9lld steps %5.0f/s | reward %.3f amp %.3f | return %6.2f len %5.1f | "
+      "pos %.3f rot %.3f vel %.3f ang %.3f energy %.3f | pi %+.4f v %.4f kl %.4f clip %.3f | "
+      "D %.3f (expert %+.2f policy %+.2f) | term %.2fm tracked %.2f | sessions %d | collect %.1fs update %.1fs lag %d | "
+      "left %s\n",
+      s.iteration, last, static_cast<long long>(s.env_steps), s.env_steps_per_second, s.mean_task_reward,
+      s.mean_amp_reward, s.mean_episode_return, s.mean_episode_length, s.reward_terms[0], s.reward_terms[1],
+      s.reward_terms[2], s.reward_terms[3], s.reward_terms[4], s.policy_loss, s.value_loss, s.approx_kl,
+      s.clip_fraction, s.discriminator_loss, s.expert_logit, s.policy_logit, s.termination_distance,
+      s.tracked_share, s.live_sessions, s.collect_seconds, s.update_seconds, s.policy_lag,
+      absl::FormatDuration(absl::Seconds(std::round(left))).c_str());
+  std::fflush(stdout);
+}
+
+// What follows each iteration: its line, its row in progress.csv and TensorBoard, the time
+// budget, and the policy exports of the milestones it passed.
+struct IterationReporter {
+  Trainer* trainer;
+  TensorBoardWriter* events;
+  CsvLogger* csv;
+  const TrainerConfig* config;
+  std::vector<int64_t> milestones;
+  size_t next_milestone = 0;
+  absl::Time start;
+  double budget_min = 0;
+  int first = 0, last = 0;
+
+  void Report(const IterationStats& s) {
+    const double elapsed = absl::ToDoubleSeconds(absl::Now() - start);
+    const double per_iteration = elapsed / std::max(1, s.iteration - first);
+    double left = per_iteration * (last - s.iteration);
+    if (budget_min > 0) left = std::min(left, std::max(0.0, budget_min * 60 - elapsed));
+    PrintIteration(s, last, left);
+    const std::vector<std::string>& columns = ProgressColumns();
+    const std::vector<double> row = ProgressRow(s, elapsed);
+    for (size_t c = 2; c < columns.size(); ++c) (void)events->AddScalar(columns[c], s.env_steps, row[c]);
+    (void)events->Flush();
+    (void)csv->Append(row);
+    if (budget_min > 0 && elapsed >= budget_min * 60) g_stop = true;
+    ExportMilestones(s);
+  }
+
+  // The first iteration at or past a milestone exports the policy it ends with.
+  void ExportMilestones(const IterationStats& s) {
+    for (; next_milestone < milestones.size() && s.env_steps >= milestones[next_milestone]; ++next_milestone) {
+      const std::string path = absl::StrFormat("%s/policy_at_%gM.pt", config->run_dir, milestones[next_milestone] / 1e6);
+      if (absl::Status exported = trainer->ExportPolicy(path); !exported.ok()) {
+        LogLine("milestone policy %s not written: %s", path, exported.message());
+      } else {
+        LogLine("milestone: %lld env steps, policy exported to %s", static_cast<long long>(s.env_steps), path);
+      }
+    }
+  }
+};
+
+// Whatever stopped the run, its last state goes to disk: the checkpoint and the exported policy.
+int SaveFinalState(Trainer& trainer, const TrainerConfig& config) {
+  if (absl::Status saved = trainer.SaveCheckpoint(config.run_dir + "/checkpoint.pt"); !saved.ok()) {
+    return Fail(std::string(saved.message()));
+  }
+  if (absl::Status exported = trainer.ExportPolicy(config.run_dir + "/policy.pt"); !exported.ok()) {
+    return Fail(std::string(exported.message()));
+  }
+  LogLine("done: %d iterations, %lld env steps; checkpoint %s/checkpoint.pt, policy %s/policy.pt",
+          trainer.iteration(), static_cast<long long>(trainer.env_steps()), config.run_dir, config.run_dir);
+  return 0;
+}
+
+int RunTraining(const std::string& token) {
+  auto config = ConfigFromFlags(token);
+  if (!config.ok()) return Fail(std::string(config.status().message()), 2);
   auto milestones = ParseMilestones(absl::GetFlag(FLAGS_milestones));
   if (!milestones.ok()) return Fail(std::string(milestones.status().message()), 2);
   auto trainer = Trainer::Create(*config);
   if (!trainer.ok()) return Fail(std::string(trainer.status().message()));
   auto events = TensorBoardWriter::Open(config->run_dir);
   if (!events.ok()) return Fail(std::string(events.status().message()));
-  const std::vector<std::string> columns = {
-      "iteration", "env_steps", "env_steps_per_second", "mean_task_reward", "mean_amp_reward", "episode_return",
-      "episode_length", "reward_pos", "reward_rot", "reward_vel", "reward_ang_vel", "reward_energy", "policy_loss",
-      "value_loss", "approx_kl", "clip_fraction", "discriminator_loss", "expert_logit", "policy_logit",
-      "gradient_penalty", "live_sessions", "wall_seconds", "termination_distance", "tracked_share",
-      "collect_seconds", "update_seconds", "policy_lag"};
-  auto csv = CsvLogger::Open(config->run_dir + "/progress.csv", columns);
+  auto csv = CsvLogger::Open(config->run_dir + "/progress.csv", ProgressColumns());
   if (!csv.ok()) return Fail(std::string(csv.status().message()));
 
-  size_t next_milestone = 0;  // milestones a resumed run passed already are skipped
-  while (next_milestone < milestones->size() && (*milestones)[next_milestone] <= (*trainer)->env_steps()) ++next_milestone;
-  const absl::Time start = absl::Now();
-  const double budget_min = absl::GetFlag(FLAGS_time_budget_min);
-  const int first = (*trainer)->iteration(), last = first + config->iterations;
+  IterationReporter reporter{trainer->get(), events->get(), csv->get(), &*config, *std::move(milestones)};
+  // Milestones a resumed run passed already are skipped.
+  while (reporter.next_milestone < reporter.milestones.size() &&
+         reporter.milestones[reporter.next_milestone] <= (*trainer)->env_steps()) {
+    ++reporter.next_milestone;
+  }
+  reporter.start = absl::Now();
+  reporter.budget_min = absl::GetFlag(FLAGS_time_budget_min);
+  reporter.first = (*trainer)->iteration();
+  reporter.last = reporter.first + config->iterations;
   LogLine("training %s preset on %d server(s), %d envs each, layout %s%s%s, %s actions, run dir %s",
           config->model.preset, static_cast<int>(config->servers.size()), config->envs_per_server,
           config->part_layout, config->model.whole_body ? ", whole-body controller" : "",
           config->model.attention ? "" : ", no attention", config->action_mode, config->run_dir);
-  absl::Status status = (*trainer)->Run(
-      [&](const IterationStats& s) {
-        const double elapsed = absl::ToDoubleSeconds(absl::Now() - start);
-        const double per_iteration = elapsed / std::max(1, s.iteration - first);
-        double left = per_iteration * (last - s.iteration);
-        if (budget_min > 0) left = std::min(left, std::max(0.0, budget_min * 60 - elapsed));
-        std::printf(
-            "it %4d/%d | %9lld steps %5.0f/s | reward %.3f amp %.3f | return %6.2f len %5.1f | "
-            "pos %.3f rot %.3f vel %.3f ang %.3f energy %.3f | pi %+.4f v %.4f kl %.4f clip %.3f | "
-            "D %.3f (expert %+.2f policy %+.2f) | term %.2fm tracked %.2f | sessions %d | collect %.1fs update %.1fs lag %d | "
-            "left %s\n",
-            s.iteration, last, static_cast<long long>(s.env_steps), s.env_steps_per_second, s.mean_task_reward,
-            s.mean_amp_reward, s.mean_episode_return, s.mean_episode_length, s.reward_terms[0], s.reward_terms[1],
-            s.reward_terms[2], s.reward_terms[3], s.reward_terms[4], s.policy_loss, s.value_loss, s.approx_kl,
-            s.clip_fraction, s.discriminator_loss, s.expert_logit, s.policy_logit, s.termination_distance,
-            s.tracked_share, s.live_sessions, s.collect_seconds, s.update_seconds, s.policy_lag,
-            absl::FormatDuration(absl::Seconds(std::round(left))).c_str());
-        std::fflush(stdout);
-        const std::vector<double> row = {
-            double(s.iteration), double(s.env_steps), s.env_steps_per_second, s.mean_task_reward, s.mean_amp_reward,
-            s.mean_episode_return, s.mean_episode_length, s.reward_terms[0], s.reward_terms[1], s.reward_terms[2],
-            s.reward_terms[3], s.reward_terms[4], s.policy_loss, s.value_loss, s.approx_kl, s.clip_fraction,
-            s.discriminator_loss, s.expert_logit, s.policy_logit, s.gradient_penalty, double(s.live_sessions), elapsed,
-            s.termination_distance, s.tracked_share, s.collect_seconds, s.update_seconds, double(s.policy_lag)};
-        for (size_t c = 2; c < columns.size(); ++c) (void)(*events)->AddScalar(columns[c], s.env_steps, row[c]);
-        (void)(*events)->Flush();
-        (void)(*csv)->Append(row);
-        if (budget_min > 0 && elapsed >= budget_min * 60) g_stop = true;
-        // The first iteration at or past a milestone exports the policy it ends with.
-        for (; next_milestone < milestones->size() && s.env_steps >= (*milestones)[next_milestone]; ++next_milestone) {
-          const std::string path =
-              absl::StrFormat("%s/policy_at_%gM.pt", config->run_dir, (*milestones)[next_milestone] / 1e6);
-          if (absl::Status exported = (*trainer)->ExportPolicy(path); !exported.ok()) {
-            LogLine("milestone policy %s not written: %s", path, exported.message());
-          } else {
-            LogLine("milestone: %lld env steps, policy exported to %s", static_cast<long long>(s.env_steps), path);
-          }
-        }
-      },
-      &g_stop);
+  absl::Status status = (*trainer)->Run([&](const IterationStats& s) { reporter.Report(s); }, &g_stop);
   if (!status.ok()) return Fail(std::string(status.message()));
-  // Whatever stopped the run, its last state is on disk.
-  if (absl::Status saved = (*trainer)->SaveCheckpoint(config->run_dir + "/checkpoint.pt"); !saved.ok()) {
-    return Fail(std::string(saved.message()));
-  }
-  if (absl::Status exported = (*trainer)->ExportPolicy(config->run_dir + "/policy.pt"); !exported.ok()) {
-    return Fail(std::string(exported.message()));
-  }
-  LogLine("done: %d iterations, %lld env steps; checkpoint %s/checkpoint.pt, policy %s/policy.pt",
-          (*trainer)->iteration(), static_cast<long long>((*trainer)->env_steps()), config->run_dir, config->run_dir);
-  return 0;
+  return SaveFinalState(**trainer, *config);
 }
 
 }  // namespace
