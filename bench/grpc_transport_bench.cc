@@ -18,6 +18,7 @@
 #include "absl/flags/parse.h"
 #include "absl/strings/str_cat.h"
 #include "client/cpp/simulation_client.h"
+#include "common/wire/tensor_codec.h"
 #include "server/service/server_runner.h"
 
 ABSL_FLAG(int, repeats, 3, "measurements per configuration (median reported)");
@@ -74,8 +75,8 @@ Measurement OverGrpc(SimulationClient* client, int envs, v1::AmpObs amp, double 
     const auto t0 = Clock::now();
     if (!(*stream)->Step(actions.data()).ok()) return {};
     // What a learner does with every result: decode what it trains on.
-    if (!DecodeFloatTensor((*stream)->result().obs(), "obs", &obs).ok()) return {};
-    if (!DecodeFloatTensor((*stream)->result().reward(), "reward", &reward).ok()) return {};
+    if (!ReadFloatTensor((*stream)->result().obs(), "obs", &obs).ok()) return {};
+    if (!ReadFloatTensor((*stream)->result().reward(), "reward", &reward).ok()) return {};
     latencies.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
     env_steps += envs;
   }

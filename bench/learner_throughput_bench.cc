@@ -15,13 +15,14 @@
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
 #include "absl/strings/str_cat.h"
+#include "common/policy/policy_checkpoint.h"
 #include "learner/critic.h"
 #include "learner/modskill_policy.h"
 #include "learner/ppo_loss.h"
 #include "learner/running_mean_std.h"
 #include "learner/trainer.h"
 #include "server/core/util/data_paths.h"
-#include "server/service/policy_checkpoint.h"
+#include "server/service/proto_conversions.h"
 #include "server/service/server_runner.h"
 
 ABSL_FLAG(int, repeats, 5, "timed repetitions per measurement (median reported)");

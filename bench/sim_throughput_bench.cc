@@ -14,10 +14,10 @@
 
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
-#include "server/core/util/data_paths.h"
 #include "server/core/env/env_batch.h"
 #include "server/core/env/humanoid_state.h"
 #include "server/core/env/reference_actions.h"
+#include "server/core/util/data_paths.h"
 
 ABSL_FLAG(int, repeats, 5, "measurements per configuration (median reported)");
 ABSL_FLAG(double, seconds, 1.5, "seconds per measurement");

@@ -29,11 +29,11 @@
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
 #include "bench/soak_client.h"
+#include "common/policy/policy_checkpoint.h"
 #include "modskill/v1/modskill.grpc.pb.h"
-#include "server/core/util/data_paths.h"
-#include "server/core/sim/humanoid_spec.h"
 #include "server/core/motion/motion_library.h"
-#include "server/service/policy_checkpoint.h"
+#include "server/core/sim/humanoid_spec.h"
+#include "server/core/util/data_paths.h"
 #include "server/service/server_runner.h"
 
 ABSL_FLAG(double, minutes, 10.0, "how long the clients run");

@@ -9,9 +9,9 @@
 #include <string>
 
 #include "server/core/motion/clip_name.h"
-#include "server/core/sim/humanoid_spec.h"
 #include "server/core/motion/motion_import.h"
 #include "server/core/motion/resource_limits.h"
+#include "server/core/sim/humanoid_spec.h"
 
 namespace modskill::fuzz {
 namespace {

@@ -1,5 +1,5 @@
 // libFuzzer target: a policy checkpoint's metadata, the JSON its archive carries as
-// modskill/env_spec.json (PolicySpec::FromJson, server/service/policy_spec.cc), then what
+// modskill/env_spec.json (PolicySpec::FromJson, common/policy/policy_spec.cc), then what
 // Rollout does with a spec that parses: look up its layout and check it against that layout's
 // env spec. The zip container around the JSON is torch's reader (torch::jit::load), not ours,
 // and stays out of the torch-free fuzz build.
@@ -10,8 +10,9 @@
 #include <cstdint>
 #include <string>
 
+#include "common/policy/policy_spec.h"
 #include "fuzz/fuzz_service.h"
-#include "server/service/policy_spec.h"
+#include "server/core/env/policy_fit.h"
 
 namespace modskill::fuzz {
 namespace {
@@ -39,7 +40,7 @@ void FuzzPolicySpec(const uint8_t* data, size_t size) {
   const ServiceFixture& fixture = Fixture();
   auto env_spec = fixture.env_specs.find(spec->part_layout);
   if (env_spec == fixture.env_specs.end()) return;  // Rollout: FAILED_PRECONDITION, unknown layout
-  const absl::Status compatible = spec->CheckCompatible(env_spec->second);
+  const absl::Status compatible = CheckPolicyFitsEnv(*spec, env_spec->second);
   Check(compatible.ok() || compatible.code() == absl::StatusCode::kFailedPrecondition,
         "an incompatible spec is FAILED_PRECONDITION");
 }

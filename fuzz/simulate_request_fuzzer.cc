@@ -10,12 +10,12 @@
 #include <cstdint>
 #include <vector>
 
+#include "common/wire/tensor_codec.h"
 #include "fuzz/fuzz_service.h"
 #include "google/protobuf/stubs/logging.h"
 #include "modskill/v1/modskill.pb.h"
 #include "server/core/env/env_batch.h"
 #include "server/service/session_config_validation.h"
-#include "server/service/tensor_codec.h"
 
 namespace modskill::fuzz {
 namespace {

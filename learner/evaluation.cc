@@ -6,7 +6,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
-#include "server/service/policy_checkpoint.h"
+#include "common/policy/policy_checkpoint.h"
 
 namespace modskill::learner {
 

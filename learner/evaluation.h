@@ -8,7 +8,7 @@
 
 #include "absl/status/statusor.h"
 #include "client/cpp/simulation_client.h"
-#include "server/service/policy_spec.h"
+#include "common/policy/policy_spec.h"
 
 namespace modskill::learner {
 

@@ -73,19 +73,19 @@ absl::Status NetworkLayout::Validate() const {
   return CheckTiling(*this, "action", action_size, &PartSlices::action_start, &PartSlices::action_size);
 }
 
-NetworkLayout LayoutFromEnvSpec(const EnvSpec& spec) {
+NetworkLayout LayoutFromWireSpec(const v1::EnvSpec& spec) {
   NetworkLayout layout;
-  layout.obs_size = spec.obs_size;
-  layout.action_size = spec.action_size;
-  layout.amp_obs_size = spec.amp_obs_size;
-  for (int p = 0; p < spec.layout.num_parts(); ++p) {
-    PartSlices part;
-    part.name = spec.layout.parts[p].name;
-    part.obs_start = spec.part_obs[p].start;
-    part.obs_size = spec.part_obs[p].size;
-    part.action_start = spec.part_action[p].start;
-    part.action_size = spec.part_action[p].size;
-    layout.parts.push_back(part);
+  layout.obs_size = spec.obs_size();
+  layout.action_size = spec.action_size();
+  layout.amp_obs_size = static_cast<int64_t>(spec.amp_history()) * spec.amp_obs_per_frame();
+  for (const v1::BodyPart& part : spec.parts()) {
+    PartSlices slices;
+    slices.name = part.name();
+    slices.obs_start = part.obs().start();
+    slices.obs_size = part.obs().size();
+    slices.action_start = part.action().start();
+    slices.action_size = part.action().size();
+    layout.parts.push_back(slices);
   }
   return layout;
 }

@@ -10,7 +10,7 @@
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
-#include "server/core/env/env_spec.h"
+#include "modskill/v1/modskill.pb.h"
 
 namespace modskill::learner {
 
@@ -47,8 +47,9 @@ struct NetworkLayout {
   absl::Status Validate() const;
 };
 
-// The layout of the env's observation and action (EnvSpec::part_obs / part_action).
-NetworkLayout LayoutFromEnvSpec(const EnvSpec& spec);
+// The layout of the env's observation and action as the server describes it (EnvSpec.parts);
+// check it with Validate before building networks on it.
+NetworkLayout LayoutFromWireSpec(const v1::EnvSpec& spec);
 
 }  // namespace modskill::learner
 

@@ -1,5 +1,5 @@
 // Exports a trained ModSkill policy as the TorchScript checkpoint the server runs
-// (server/service/policy_checkpoint.h): forward(obs) maps RAW observations [N, obs_size] to the
+// (common/policy/policy_checkpoint.h): forward(obs) maps RAW observations [N, obs_size] to the
 // deterministic action means [N, action_size], normalization included.
 #ifndef MODSKILL_LEARNER_POLICY_EXPORT_H_
 #define MODSKILL_LEARNER_POLICY_EXPORT_H_
@@ -8,10 +8,10 @@
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
+#include "common/policy/policy_checkpoint.h"
 #include "learner/amp_discriminator.h"
 #include "learner/modskill_policy.h"
 #include "learner/running_mean_std.h"
-#include "server/service/policy_checkpoint.h"
 
 namespace modskill::learner {
 

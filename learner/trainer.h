@@ -92,7 +92,7 @@ class Trainer {
   // Samples actions for `obs` into step t of `r` and sends them.
   absl::Status Act(SlotRollout& r, int t, const torch::Tensor& obs, ActingNetworks& acting);
   // Books one step result of `r` (rewards, dones, episode ends) at step t.
-  void RecordStep(SlotRollout& r, int t);
+  absl::Status RecordStep(SlotRollout& r, int t);
   // Torch threads for the update phases (0: keep the current number).
   int UpdateThreads() const;
   // The networks being trained, for a collection that waits for its update.
@@ -118,7 +118,7 @@ class Trainer {
   void SummarizeEpisodes(IterationStats* stats);
   void Summarize(const TrainingBatch& batch, IterationStats* stats);
   // Notes how the episodes that ended in `result` went, for the session's failure report.
-  void RecordEpisodeEnds(SessionSlot* slot, const v1::StepResult& result);
+  absl::Status RecordEpisodeEnds(SessionSlot* slot, const v1::StepResult& result);
   // Sends each live session its failure list and logs the hardest clips.
   void ReportFailures();
 

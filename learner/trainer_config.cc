@@ -3,9 +3,6 @@
 #include <nlohmann/json.hpp>
 
 #include "absl/strings/str_cat.h"
-#include "server/core/env/action_mapping.h"
-#include "server/core/env/env_batch.h"
-#include "server/core/env/tracking_env.h"
 
 namespace modskill::learner {
 

@@ -6,8 +6,9 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
+#include "common/policy/action_mode.h"
+#include "common/policy/termination.h"
 #include "learner/model_config.h"
-#include "server/core/env/action_mapping.h"
 
 namespace modskill {
 enum class TerminationBodies;  // server/core/env/tracking_env.h

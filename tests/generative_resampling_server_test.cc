@@ -11,8 +11,8 @@
 
 #include "absl/strings/match.h"
 #include "absl/time/clock.h"
-#include "server/core/motion/clip_file.h"
 #include "server/core/curriculum/session_motion_set.h"
+#include "server/core/motion/clip_file.h"
 #include "server/service/external_motion_generator.h"
 #include "tests/server_fixture.h"
 #include "tests/test_fixtures.h"

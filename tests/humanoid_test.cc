@@ -8,10 +8,10 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "server/core/util/data_paths.h"
-#include "server/core/sim/humanoid_model.h"
 #include "server/core/env/humanoid_state.h"
+#include "server/core/sim/humanoid_model.h"
 #include "server/core/sim/pd_controller.h"
+#include "server/core/util/data_paths.h"
 #include "tests/test_fixtures.h"
 
 namespace modskill {

@@ -13,6 +13,7 @@
 #include <torch/script.h>
 #include <torch/torch.h>
 
+#include "common/policy/policy_checkpoint.h"
 #include "learner/amp_discriminator.h"
 #include "learner/amp_loss.h"
 #include "learner/critic.h"
@@ -23,12 +24,13 @@
 #include "learner/running_mean_std.h"
 #include "learner/skill_attention.h"
 #include "server/core/env/env_spec.h"
+#include "server/core/env/policy_fit.h"
 #include "server/core/sim/humanoid_model.h"
 #include "server/core/sim/humanoid_spec.h"
-#include "server/service/discriminator_scorer.h"
 #include "server/core/sim/part_layout.h"
 #include "server/core/sim/physics_options.h"
-#include "server/service/policy_checkpoint.h"
+#include "server/service/discriminator_scorer.h"
+#include "server/service/proto_conversions.h"
 
 namespace modskill::learner {
 namespace {
@@ -36,8 +38,14 @@ namespace {
 using ::testing::HasSubstr;
 
 // The env spec of the shipped humanoid with the named part layout, built once per layout.
-const EnvSpec& Spec(const std::string& layout_name) {
-  static std::map<std::string, EnvSpec>* specs = new std::map<std::string, EnvSpec>();
+// The server's env spec for a layout, in memory and as the wire describes it to the learner.
+struct Specs {
+  EnvSpec env;
+  v1::EnvSpec wire;
+};
+
+const Specs& SpecsOf(const std::string& layout_name) {
+  static std::map<std::string, Specs>* specs = new std::map<std::string, Specs>();
   auto it = specs->find(layout_name);
   if (it != specs->end()) return it->second;
   auto humanoid_spec = HumanoidSpec::LoadDefault();
@@ -48,10 +56,14 @@ const EnvSpec& Spec(const std::string& layout_name) {
   EXPECT_TRUE(catalog.ok()) << catalog.status();
   auto layout = catalog->Get(layout_name);
   EXPECT_TRUE(layout.ok()) << layout.status();
-  return specs->emplace(layout_name, MakeEnvSpec(**humanoid, *layout)).first->second;
+  Specs made{MakeEnvSpec(**humanoid, *layout), {}};
+  ToProto(made.env, **humanoid, &made.wire);
+  return specs->emplace(layout_name, std::move(made)).first->second;
 }
 
-NetworkLayout Layout(const std::string& name = "5part") { return LayoutFromEnvSpec(Spec(name)); }
+const EnvSpec& Spec(const std::string& layout_name) { return SpecsOf(layout_name).env; }
+
+NetworkLayout Layout(const std::string& name = "5part") { return LayoutFromWireSpec(SpecsOf(name).wire); }
 
 ModelConfig Config(const std::string& preset = "small") {
   auto config = ModelConfig::Preset(preset);
@@ -65,7 +77,7 @@ std::string TmpPath(const std::string& name) {
 }
 
 // The spec of the server's env, as a checkpoint stores it.
-PolicySpec SpecOf(const std::string& layout_name = "5part") { return PolicySpec::FromEnvSpec(Spec(layout_name)); }
+PolicySpec SpecOf(const std::string& layout_name = "5part") { return PolicySpecForEnv(Spec(layout_name)); }
 
 // Observation statistics as after some training: per-feature means and variances far from 0 and 1.
 RunningMeanStd TrainedNormalizer(int64_t size) {
@@ -278,7 +290,7 @@ void ExpectExportMatches(ModSkillPolicy& policy, const std::string& layout_name,
   auto checkpoint = PolicyCheckpoint::LoadFile(path);
   ASSERT_TRUE(checkpoint.ok()) << checkpoint.status();
   EXPECT_EQ((*checkpoint)->spec().ToJson(), spec.ToJson());
-  EXPECT_TRUE((*checkpoint)->spec().CheckCompatible(Spec(layout_name)).ok());
+  EXPECT_TRUE(CheckPolicyFitsEnv((*checkpoint)->spec(), Spec(layout_name)).ok());
   const torch::Tensor input = raw.contiguous();
   std::vector<float> actions(static_cast<size_t>(n) * layout.action_size);
   const absl::Status acted = (*checkpoint)->Act(input.data_ptr<float>(), n, actions.data());

@@ -11,9 +11,9 @@
 
 #include "absl/time/clock.h"
 #include "common/atomic_file.h"
+#include "common/policy/policy_checkpoint.h"
 #include "learner/evaluation.h"
 #include "learner/trainer.h"
-#include "server/service/policy_checkpoint.h"
 #include "tests/server_fixture.h"
 
 namespace modskill::learner {

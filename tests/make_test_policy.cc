@@ -9,12 +9,13 @@
 #include <cstring>
 #include <string>
 
+#include "common/policy/policy_checkpoint.h"
 #include "server/core/env/env_spec.h"
+#include "server/core/env/policy_fit.h"
 #include "server/core/sim/humanoid_model.h"
 #include "server/core/sim/humanoid_spec.h"
 #include "server/core/sim/part_layout.h"
 #include "server/core/sim/physics_options.h"
-#include "server/service/policy_checkpoint.h"
 
 namespace {
 
@@ -60,7 +61,7 @@ int main(int argc, char** argv) {
   if (!layout.ok()) return Fail("--layout", std::string(layout.status().message()));
 
   const EnvSpec env_spec = MakeEnvSpec(**humanoid, *layout);
-  const PolicySpec policy_spec = PolicySpec::FromEnvSpec(env_spec);
+  const PolicySpec policy_spec = PolicySpecForEnv(env_spec);
   // Empty weight: zeros; zero bias: every action 0, i.e. the PD target at the range midpoint.
   const std::vector<float> bias(policy_spec.action_size, 0.0f);
   if (auto status = SaveAffinePolicy(out, policy_spec, {}, bias); !status.ok()) {

@@ -9,8 +9,8 @@
 #include <gtest/gtest.h>
 
 #include "server/core/curriculum/motion_variants.h"
-#include "server/core/sim/part_layout.h"
 #include "server/core/curriculum/plausibility_filter.h"
+#include "server/core/sim/part_layout.h"
 #include "tests/test_fixtures.h"
 
 namespace modskill {

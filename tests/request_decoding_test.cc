@@ -10,9 +10,9 @@
 
 #include <gtest/gtest.h>
 
+#include "common/policy/policy_spec.h"
 #include "server/core/sim/humanoid_spec.h"
 #include "server/core/sim/part_layout.h"
-#include "server/service/policy_spec.h"
 #include "server/service/session_config_validation.h"
 
 namespace modskill {

@@ -12,7 +12,8 @@
 
 #include "absl/time/clock.h"
 #include "common/atomic_file.h"
-#include "server/service/policy_checkpoint.h"
+#include "common/policy/policy_checkpoint.h"
+#include "server/core/env/policy_fit.h"
 #include "tests/server_fixture.h"
 #include "tests/simulation_server_fixture.h"
 
@@ -26,7 +27,7 @@ std::string ZeroPolicy(const std::string& layout_name = "5part") {
   auto humanoid = HumanoidModel::Create(DefaultSpec(), PhysicsOptions());
   const EnvSpec spec = MakeEnvSpec(**humanoid, *catalog->Get(layout_name));
   const std::string path = TempDir() + "/zero_" + layout_name + ".pt";
-  EXPECT_TRUE(SaveAffinePolicy(path, PolicySpec::FromEnvSpec(spec), {}, {}).ok());
+  EXPECT_TRUE(SaveAffinePolicy(path, PolicySpecForEnv(spec), {}, {}).ok());
   return path;
 }
 
@@ -91,7 +92,7 @@ TEST_F(SimulationServerTest, RolloutBadInputs) {
   // A checkpoint for another observation size.
   auto catalog = PartLayoutCatalog::LoadDefault(DefaultSpec());
   auto humanoid = HumanoidModel::Create(DefaultSpec(), PhysicsOptions());
-  PolicySpec other = PolicySpec::FromEnvSpec(MakeEnvSpec(**humanoid, *catalog->Get("5part")));
+  PolicySpec other = PolicySpecForEnv(MakeEnvSpec(**humanoid, *catalog->Get("5part")));
   other.obs_size = 100;
   const std::string mismatched = TempDir() + "/mismatched.pt";
   ASSERT_TRUE(SaveAffinePolicy(mismatched, other, {}, {}).ok());
@@ -117,7 +118,7 @@ TEST_F(SimulationServerTest, RolloutBadInputs) {
 TEST_F(SimulationServerTest, RolloutRunsAPolicyInItsTrainedActionMode) {
   auto catalog = PartLayoutCatalog::LoadDefault(DefaultSpec());
   auto humanoid = HumanoidModel::Create(DefaultSpec(), PhysicsOptions());
-  PolicySpec residual = PolicySpec::FromEnvSpec(MakeEnvSpec(**humanoid, *catalog->Get("5part")));
+  PolicySpec residual = PolicySpecForEnv(MakeEnvSpec(**humanoid, *catalog->Get("5part")));
   residual.action = ActionMapping{ActionMode::kResidual, 0.5};
   auto bytes = AffinePolicyBytes(residual, {}, {});
   ASSERT_TRUE(bytes.ok()) << bytes.status();

@@ -13,6 +13,7 @@
 
 #include "absl/time/clock.h"
 #include "common/atomic_file.h"
+#include "common/wire/tensor_codec.h"
 #include "server/core/curriculum/adaptive_sampler.h"
 #include "tests/server_fixture.h"
 #include "tests/simulation_server_fixture.h"
@@ -259,7 +260,7 @@ TEST_F(SimulationServerTest, StepResultsCarryPerPartErrors) {
     EXPECT_EQ(initial.shape(1), parts);
     EXPECT_EQ(initial.dtype(), v1::FLOAT32);
     std::vector<float> errors;
-    ASSERT_TRUE(DecodeFloatTensor(initial, "part_error", &errors).ok());
+    ASSERT_TRUE(ReadFloatTensor(initial, "part_error", &errors).ok());
     ASSERT_EQ(errors.size(), static_cast<size_t>(n) * parts);
     for (float e : errors) EXPECT_EQ(e, 0.f);  // reset onto the reference
     std::vector<float> zeros(static_cast<size_t>(n) * 69, 0.f), mean;
@@ -267,8 +268,8 @@ TEST_F(SimulationServerTest, StepResultsCarryPerPartErrors) {
       ASSERT_TRUE((*stream)->Step(zeros.data()).ok());
       const v1::StepResult& result = (*stream)->result();
       ASSERT_EQ(result.part_error().shape(1), parts);
-      ASSERT_TRUE(DecodeFloatTensor(result.part_error(), "part_error", &errors).ok());
-      ASSERT_TRUE(DecodeFloatTensor(result.mean_body_error(), "mean_body_error", &mean).ok());
+      ASSERT_TRUE(ReadFloatTensor(result.part_error(), "part_error", &errors).ok());
+      ASSERT_TRUE(ReadFloatTensor(result.mean_body_error(), "mean_body_error", &mean).ok());
       for (int i = 0; i < n; ++i) {
         // Part means weighted by their body counts give the whole-body mean.
         double weighted = 0;
@@ -299,7 +300,7 @@ TEST_F(SimulationServerTest, SampleReferenceAmpMatchesTheResetHistories) {
   ASSERT_EQ(samples->amp_obs().shape(0), 50);
   ASSERT_EQ(samples->amp_obs().shape(1), 2320);
   std::vector<float> values;
-  ASSERT_TRUE(DecodeFloatTensor(samples->amp_obs(), "amp_obs", &values).ok());
+  ASSERT_TRUE(ReadFloatTensor(samples->amp_obs(), "amp_obs", &values).ok());
   // Each sample is a reference history: the initial AMP rows of the session are too, and the
   // root height (feature 0) of every frame lies in the walk clip's range.
   const MotionClip& walk = DefaultMotions()->clip(DefaultMotions()->Find("deepmimic_walk"));

@@ -12,9 +12,10 @@
 
 #include "absl/strings/str_cat.h"
 #include "common/atomic_file.h"
+#include "common/policy/policy_checkpoint.h"
+#include "server/core/env/policy_fit.h"
 #include "server/core/sim/humanoid_model.h"
 #include "server/core/sim/part_layout.h"
-#include "server/service/policy_checkpoint.h"
 #include "tests/process_memory.h"
 #include "tests/server_fixture.h"
 #include "tests/test_files.h"
@@ -32,7 +33,7 @@ std::string WriteZeroPolicy(const std::string& path) {
   auto catalog = PartLayoutCatalog::LoadDefault(DefaultSpec());
   auto humanoid = HumanoidModel::Create(DefaultSpec(), PhysicsOptions());
   const EnvSpec spec = MakeEnvSpec(**humanoid, *catalog->Get("5part"));
-  EXPECT_TRUE(SaveAffinePolicy(path, PolicySpec::FromEnvSpec(spec), {}, {}).ok());
+  EXPECT_TRUE(SaveAffinePolicy(path, PolicySpecForEnv(spec), {}, {}).ok());
   return path;
 }
 

@@ -17,6 +17,7 @@
 
 #include "absl/time/clock.h"
 #include "common/atomic_file.h"
+#include "common/wire/tensor_codec.h"
 #include "tests/server_fixture.h"
 #include "tests/simulation_server_fixture.h"
 
@@ -68,7 +69,7 @@ TEST_F(SimulationServerTest, SessionEqualsInProcessEnvBatch) {
   auto local = MakeBatch(local_config);
   local->Reset();
   std::vector<float> obs;
-  ASSERT_TRUE(DecodeFloatTensor((*stream)->opened().initial().obs(), "obs", &obs).ok());
+  ASSERT_TRUE(ReadFloatTensor((*stream)->opened().initial().obs(), "obs", &obs).ok());
   ASSERT_EQ(obs, local->buffers().obs);
   EXPECT_EQ((*stream)->opened().clip_names_size(), DefaultMotions()->size());
   for (int s = 0; s < 12; ++s) {
@@ -78,11 +79,11 @@ TEST_F(SimulationServerTest, SessionEqualsInProcessEnvBatch) {
     const v1::StepResult& result = (*stream)->result();
     EXPECT_EQ(result.step(), s + 1);
     std::vector<float> remote;
-    ASSERT_TRUE(DecodeFloatTensor(result.obs(), "obs", &remote).ok());
+    ASSERT_TRUE(ReadFloatTensor(result.obs(), "obs", &remote).ok());
     ASSERT_EQ(remote, local->buffers().obs) << s;
-    ASSERT_TRUE(DecodeFloatTensor(result.reward(), "reward", &remote).ok());
+    ASSERT_TRUE(ReadFloatTensor(result.reward(), "reward", &remote).ok());
     ASSERT_EQ(remote, local->buffers().reward) << s;
-    ASSERT_TRUE(DecodeFloatTensor(result.amp_obs(), "amp_obs", &remote).ok());
+    ASSERT_TRUE(ReadFloatTensor(result.amp_obs(), "amp_obs", &remote).ok());
     ASSERT_EQ(remote, local->buffers().amp_obs) << s;
     ASSERT_EQ(result.done().data(), std::string(local->buffers().done.begin(), local->buffers().done.end()));
     ASSERT_EQ(result.clip_id().shape(0), 6);
@@ -263,7 +264,7 @@ TEST_F(SimulationServerTest, TwoConcurrentSessions) {
     std::vector<float> zeros(4 * 69, 0.f), reward;
     for (int s = 0; s < 20; ++s) {
       ASSERT_TRUE((*stream)->Step(zeros.data()).ok());
-      ASSERT_TRUE(DecodeFloatTensor((*stream)->result().reward(), "reward", &reward).ok());
+      ASSERT_TRUE(ReadFloatTensor((*stream)->result().reward(), "reward", &reward).ok());
       rewards->insert(rewards->end(), reward.begin(), reward.end());
     }
     ASSERT_TRUE((*stream)->Close().ok());

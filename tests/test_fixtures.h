@@ -7,9 +7,9 @@
 #include <gtest/gtest.h>
 
 #include "server/core/env/env_batch.h"
-#include "server/core/sim/humanoid_spec.h"
-#include "server/core/motion/motion_library.h"
 #include "server/core/env/reference_actions.h"
+#include "server/core/motion/motion_library.h"
+#include "server/core/sim/humanoid_spec.h"
 
 namespace modskill {
 

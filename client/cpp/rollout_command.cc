@@ -1,4 +1,5 @@
 #include "client/cpp/rollout_command.h"
+#include "common/wire/tensor_codec.h"
 
 #include <algorithm>
 #include <charconv>
@@ -102,8 +103,8 @@ class FrameCollector {
   void Add(const v1::RolloutFrame& frame) {
     if (!error_.ok()) return;
     std::vector<float> sim, ref;
-    error_ = DecodeFloatTensor(frame.sim_body_pos(), "RolloutFrame.sim_body_pos", &sim);
-    if (error_.ok()) error_ = DecodeFloatTensor(frame.ref_body_pos(), "RolloutFrame.ref_body_pos", &ref);
+    error_ = ReadFloatTensor(frame.sim_body_pos(), "RolloutFrame.sim_body_pos", &sim);
+    if (error_.ok()) error_ = ReadFloatTensor(frame.ref_body_pos(), "RolloutFrame.ref_body_pos", &ref);
     if (error_.ok() && (sim.size() % 3 != 0 || sim.size() != ref.size())) {
       error_ = absl::DataLossError(absl::StrCat("RolloutFrame: ", sim.size(), " sim and ", ref.size(),
                                                 " ref floats, expected [num_bodies, 3] each"));

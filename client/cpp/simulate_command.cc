@@ -1,4 +1,5 @@
 #include "client/cpp/simulate_command.h"
+#include "common/wire/tensor_codec.h"
 
 #include <chrono>
 #include <cstdio>
@@ -44,7 +45,7 @@ int Simulate(SimulationClient& client, const SimulateOptions& options) {
     if (absl::Status status = stream.Step(actions.data()); !status.ok()) return Fail(status);
     stepping_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const v1::StepResult& result = stream.result();
-    if (absl::Status status = DecodeFloatTensor(result.reward(), "StepResult.reward", &reward); !status.ok()) {
+    if (absl::Status status = ReadFloatTensor(result.reward(), "StepResult.reward", &reward); !status.ok()) {
       return Fail(status);
     }
     for (float r : reward) reward_sum += r;

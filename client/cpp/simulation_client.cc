@@ -1,6 +1,5 @@
 #include "client/cpp/simulation_client.h"
 
-#include <cstring>
 
 #include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
@@ -17,18 +16,6 @@ absl::StatusOr<std::string> ReadTokenFile(const std::string& path) {
   std::string token(absl::StripAsciiWhitespace(*text));
   if (token.empty()) return absl::InvalidArgumentError(absl::StrCat(path, ": empty token file"));
   return token;
-}
-
-absl::Status DecodeFloatTensor(const v1::Tensor& tensor, const std::string& field, std::vector<float>* out) {
-  if (tensor.dtype() != v1::FLOAT32) return absl::InvalidArgumentError(absl::StrCat(field, ": not FLOAT32"));
-  int64_t elements = 1;
-  for (int64_t d : tensor.shape()) elements *= d;
-  if (tensor.data().size() != static_cast<size_t>(elements) * sizeof(float)) {
-    return absl::InvalidArgumentError(absl::StrCat(field, ": ", tensor.data().size(), " bytes for ", elements, " floats"));
-  }
-  out->resize(elements);
-  std::memcpy(out->data(), tensor.data().data(), tensor.data().size());
-  return absl::OkStatus();
 }
 
 absl::StatusOr<std::unique_ptr<SimulationClient>> SimulationClient::Connect(const ClientOptions& options) {

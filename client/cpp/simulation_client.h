@@ -105,9 +105,6 @@ class SimulationClient {
   std::unique_ptr<v1::Simulation::Stub> stub_;
 };
 
-// A tensor's payload as floats (copied; checks dtype and size).
-absl::Status DecodeFloatTensor(const v1::Tensor& tensor, const std::string& field, std::vector<float>* out);
-
 }  // namespace modskill
 
 #endif  // MODSKILL_CLIENT_CPP_SIMULATION_CLIENT_H_

@@ -23,10 +23,10 @@
 #include "absl/time/clock.h"
 #include "common/atomic_file.h"
 #include "common/log.h"
+#include "common/policy/policy_checkpoint.h"
 #include "learner/evaluation.h"
 #include "learner/tensorboard_writer.h"
 #include "learner/trainer.h"
-#include "server/service/policy_checkpoint.h"
 
 ABSL_FLAG(std::vector<std::string>, servers, {}, "simulation servers, host:port, comma-separated");
 ABSL_FLAG(std::string, run_dir, "", "where checkpoints, the exported policy and logs go");

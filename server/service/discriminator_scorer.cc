@@ -7,8 +7,8 @@
 #include <torch/script.h>
 
 #include "absl/strings/str_cat.h"
-#include "server/core/motion/motion_library.h"
 #include "server/core/env/reference_amp.h"
+#include "server/core/motion/motion_library.h"
 
 namespace modskill {
 namespace {

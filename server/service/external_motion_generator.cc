@@ -6,7 +6,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "common/grpc_status.h"
-#include "server/service/tensor_codec.h"
+#include "common/wire/tensor_codec.h"
 
 namespace modskill {
 namespace {

@@ -11,8 +11,8 @@
 #include "absl/status/statusor.h"
 #include "absl/time/time.h"
 #include "modskill/v1/modskill.grpc.pb.h"
-#include "server/core/sim/humanoid_spec.h"
 #include "server/core/curriculum/motion_variants.h"
+#include "server/core/sim/humanoid_spec.h"
 #include "server/core/sim/part_layout.h"
 
 namespace modskill {

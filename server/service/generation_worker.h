@@ -11,8 +11,8 @@
 #include <thread>
 
 #include "absl/synchronization/mutex.h"
-#include "server/core/sim/humanoid_spec.h"
 #include "server/core/curriculum/plausibility_filter.h"
+#include "server/core/sim/humanoid_spec.h"
 #include "server/service/external_motion_generator.h"
 #include "server/service/simulation_session.h"
 

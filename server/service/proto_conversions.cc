@@ -2,7 +2,7 @@
 
 #include <cstring>
 
-#include "server/service/tensor_codec.h"
+#include "common/wire/tensor_codec.h"
 
 namespace modskill {
 
@@ -57,16 +57,25 @@ void ToProto(const ClipRolloutMetrics& metrics, v1::ClipMetrics* out) {
   out->set_max_mean_body_error_m(metrics.worst_mean_body_error);
 }
 
-void FillStepResult(const EnvBatch& batch, int64_t step, int amp_frames, v1::StepResult* out) {
-  const BatchBuffers& b = batch.buffers();
-  const int64_t n = batch.num_envs();
-  const EnvSpec& spec = batch.spec();
-  out->set_step(step);
-  SetFloatTensor({n, spec.obs_size}, b.obs.data(), out->mutable_obs());
+namespace {
+
+void EncodeRows(const std::vector<float>& rows, int64_t n, int64_t width, v1::Tensor* out) {
+  width == StepResultWidths::kVector ? SetFloatTensor({n}, rows.data(), out) : SetFloatTensor({n, width}, rows.data(), out);
+}
+void EncodeRows(const std::vector<int32_t>& rows, int64_t n, int64_t width, v1::Tensor* out) {
+  width == StepResultWidths::kVector ? SetInt32Tensor({n}, rows.data(), out) : SetInt32Tensor({n, width}, rows.data(), out);
+}
+void EncodeRows(const std::vector<uint8_t>& rows, int64_t n, int64_t width, v1::Tensor* out) {
+  width == StepResultWidths::kVector ? SetUint8Tensor({n}, rows.data(), out) : SetUint8Tensor({n, width}, rows.data(), out);
+}
+
+// amp_obs as the session asked: the whole history, the newest frame of each row (a strided
+// gather) or nothing.
+void EncodeAmpObs(const BatchBuffers& b, const EnvSpec& spec, int amp_frames, v1::StepResult* out) {
+  const int64_t n = b.num_envs;
   if (amp_frames == kAmpHistory) {
     SetFloatTensor({n, spec.amp_obs_size}, b.amp_obs.data(), out->mutable_amp_obs());
   } else if (amp_frames == 1) {
-    // The newest frame of each row: a strided gather.
     std::string* data = out->mutable_amp_obs()->mutable_data();
     data->resize(n * spec.amp_obs_per_frame * sizeof(float));
     for (int64_t i = 0; i < n; ++i) {
@@ -80,17 +89,23 @@ void FillStepResult(const EnvBatch& batch, int64_t step, int amp_frames, v1::Ste
   } else {
     out->clear_amp_obs();
   }
-  SetFloatTensor({n}, b.reward.data(), out->mutable_reward());
-  SetFloatTensor({n, kNumRewardTerms}, b.reward_terms.data(), out->mutable_reward_terms());
-  SetUint8Tensor({n}, b.done.data(), out->mutable_done());
-  SetUint8Tensor({n}, b.truncated.data(), out->mutable_truncated());
-  SetInt32Tensor({n}, b.clip_id.data(), out->mutable_clip_id());
-  SetInt32Tensor({n}, b.frame.data(), out->mutable_frame());
-  SetInt32Tensor({n}, b.ended_clip_id.data(), out->mutable_ended_clip_id());
-  SetInt32Tensor({n}, b.ended_frame.data(), out->mutable_ended_frame());
-  SetFloatTensor({n}, b.max_body_error.data(), out->mutable_max_body_error());
-  SetFloatTensor({n}, b.mean_body_error.data(), out->mutable_mean_body_error());
-  SetFloatTensor({n, b.num_parts}, b.part_error.data(), out->mutable_part_error());
+}
+
+}  // namespace
+
+void FillStepResult(const EnvBatch& batch, int64_t step, int amp_frames, v1::StepResult* out) {
+  const BatchBuffers& b = batch.buffers();
+  const int64_t n = batch.num_envs();
+  out->set_step(step);
+  // Every field of the table, amp_obs in the form the session asked for.
+#define MODSKILL_ENCODE_FIELD(name, type, dtype, width, initial, presence)       \
+  if (StepResultPresence::presence == StepResultPresence::kWhenRequested) {     \
+    EncodeAmpObs(b, batch.spec(), amp_frames, out);                             \
+  } else {                                                                      \
+    EncodeRows(b.name, n, b.widths.width, out->mutable_##name());               \
+  }
+  MODSKILL_STEP_RESULT_FIELDS(MODSKILL_ENCODE_FIELD)
+#undef MODSKILL_ENCODE_FIELD
 }
 
 }  // namespace modskill

@@ -10,8 +10,8 @@
 #include "absl/status/statusor.h"
 #include "modskill/v1/modskill.pb.h"
 #include "server/core/env/action_mapping.h"
-#include "server/core/sim/part_layout.h"
 #include "server/core/env/tracking_env.h"
+#include "server/core/sim/part_layout.h"
 
 namespace modskill {
 

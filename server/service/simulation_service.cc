@@ -10,16 +10,17 @@
 #include "absl/time/clock.h"
 #include "common/grpc_status.h"
 #include "common/log.h"
+#include "common/policy/policy_checkpoint.h"
 #include "common/shown_value.h"
 #include "common/status_text.h"
+#include "common/wire/tensor_codec.h"
+#include "server/core/env/policy_fit.h"
 #include "server/core/motion/clip_file.h"
-#include "server/core/util/confined_path.h"
 #include "server/core/motion/motion_import.h"
+#include "server/core/util/confined_path.h"
 #include "server/service/discriminator_scorer.h"
-#include "server/service/policy_checkpoint.h"
 #include "server/service/proto_conversions.h"
 #include "server/service/session_config_validation.h"
-#include "server/service/tensor_codec.h"
 
 namespace modskill {
 namespace {
@@ -366,7 +367,7 @@ grpc::Status SimulationService::Rollout(grpc::ServerContext* context, const v1::
                               "' that this server does not offer"));
   }
   const EnvSpec spec = MakeEnvSpec(*humanoid_, *layout);
-  if (absl::Status status = (*policy)->spec().CheckCompatible(spec); !status.ok()) return ToGrpcStatus(status);
+  if (absl::Status status = CheckPolicyFitsEnv((*policy)->spec(), spec); !status.ok()) return ToGrpcStatus(status);
   const ActionMapping& trained_mapping = (*policy)->spec().action;
   if (!v1::ActionMode_IsValid(request->action_mode())) {
     return Error(grpc::StatusCode::INVALID_ARGUMENT,

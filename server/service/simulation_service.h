@@ -8,9 +8,9 @@
 
 #include "modskill/v1/modskill.grpc.pb.h"
 #include "server/core/curriculum/adaptive_sampler.h"
-#include "server/core/env/env_batch.h"
 #include "server/core/curriculum/plausibility_filter.h"
 #include "server/core/curriculum/session_motion_set.h"
+#include "server/core/env/env_batch.h"
 #include "server/service/generation_worker.h"
 #include "server/service/motion_store.h"
 #include "server/service/session_registry.h"

@@ -16,9 +16,9 @@
 #include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
 #include "server/core/curriculum/adaptive_sampler.h"
-#include "server/core/env/env_batch.h"
 #include "server/core/curriculum/failure_ledger.h"
 #include "server/core/curriculum/session_motion_set.h"
+#include "server/core/env/env_batch.h"
 
 namespace modskill {
 

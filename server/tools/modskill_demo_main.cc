@@ -9,8 +9,8 @@
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
 #include "absl/flags/usage.h"
-#include "server/core/util/data_paths.h"
 #include "server/core/env/env_batch.h"
+#include "server/core/util/data_paths.h"
 
 ABSL_FLAG(int, envs, 64, "number of environments");
 ABSL_FLAG(int, threads, 2, "worker threads");

@@ -16,9 +16,9 @@
 #include "absl/strings/str_split.h"
 #include "absl/strings/strip.h"
 #include "server/core/motion/clip_file.h"
-#include "server/core/util/confined_path.h"
-#include "server/core/sim/humanoid_spec.h"
 #include "server/core/motion/motion_import.h"
+#include "server/core/sim/humanoid_spec.h"
+#include "server/core/util/confined_path.h"
 
 ABSL_FLAG(std::string, out, "", "import: directory the .msclip files are written to");
 ABSL_FLAG(std::string, labels, "", "import: CSV 'name,humanml3d_id,label' giving clips their captions");

@@ -17,11 +17,11 @@
 #include "absl/strings/str_cat.h"
 #include "common/atomic_file.h"
 #include "common/log.h"
+#include "common/policy/policy_checkpoint.h"
 #include "server/core/curriculum/adaptive_sampler.h"
-#include "server/core/util/data_paths.h"
-#include "server/core/motion/resource_limits.h"
 #include "server/core/curriculum/session_motion_set.h"
-#include "server/service/policy_checkpoint.h"
+#include "server/core/motion/resource_limits.h"
+#include "server/core/util/data_paths.h"
 #include "server/service/server_runner.h"
 
 ABSL_FLAG(int, port, 50051, "TCP port (0: any free port, printed at start)");

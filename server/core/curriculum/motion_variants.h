@@ -44,8 +44,8 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
-#include "server/core/sim/humanoid_spec.h"
 #include "server/core/motion/motion_clip.h"
+#include "server/core/sim/humanoid_spec.h"
 #include "server/core/sim/part_layout.h"
 
 namespace modskill {

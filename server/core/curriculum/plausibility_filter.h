@@ -22,8 +22,8 @@
 #include <string>
 #include <vector>
 
-#include "server/core/sim/humanoid_spec.h"
 #include "server/core/motion/motion_clip.h"
+#include "server/core/sim/humanoid_spec.h"
 
 namespace modskill {
 

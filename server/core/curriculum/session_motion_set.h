@@ -31,8 +31,8 @@
 
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
-#include "server/core/motion/motion_library.h"
 #include "server/core/curriculum/motion_variants.h"
+#include "server/core/motion/motion_library.h"
 
 namespace modskill {
 

@@ -1,49 +1,45 @@
 // Preallocated batch tensors that envs write their rows into (EnvPool style): one contiguous
-// float32 block per field, row i belonging to env i. Shipped as is, never gathered.
+// block per field of common/wire/step_result_fields.h, row i belonging to env i. Shipped as is,
+// never gathered.
 #ifndef MODSKILL_SERVER_CORE_ENV_BATCH_BUFFERS_H_
 #define MODSKILL_SERVER_CORE_ENV_BATCH_BUFFERS_H_
 
 #include <cstdint>
 #include <vector>
 
+#include "common/wire/step_result_fields.h"
 #include "server/core/env/env_spec.h"
 
 namespace modskill {
 
+// The widths of the step result's fields for an env of `spec`.
+inline StepResultWidths WidthsOf(const EnvSpec& spec) {
+  StepResultWidths widths;
+  widths.obs = spec.obs_size;
+  widths.amp_obs = spec.amp_obs_size;
+  widths.reward_terms = kNumRewardTerms;
+  widths.parts = spec.layout.num_parts();
+  return widths;
+}
+
 struct BatchBuffers {
   int num_envs = 0;
-  std::vector<float> obs;           // [N, obs_size]; part p of env i: obs[i*obs_size + part_obs[p].start ...]
-  std::vector<float> amp_obs;       // [N, amp_obs_size], newest frame first
-  std::vector<float> reward;        // [N]
-  std::vector<float> reward_terms;  // [N, kNumRewardTerms]
-  std::vector<uint8_t> done;        // [N] episode ended (terminated or truncated); the row holds the next episode's obs
-  std::vector<uint8_t> truncated;   // [N] ended by the clip's end or the step limit, not by failure
-  std::vector<int32_t> clip_id;     // [N] clip the row's obs refers to
-  std::vector<int32_t> frame;       // [N] reference frame of the row's state
-  std::vector<int32_t> ended_clip_id;  // [N] clip of the episode that ended (valid where done)
-  std::vector<int32_t> ended_frame;    // [N] frame at which it ended
-  std::vector<float> max_body_error;   // [N] m, before any reset
-  std::vector<float> mean_body_error;  // [N] m
-  int num_parts = 0;
-  std::vector<float> part_error;       // [N, num_parts] mean body distance per part (layout order), m, before any reset
+  StepResultWidths widths;
+#define MODSKILL_BUFFER_MEMBER(name, type, dtype, width, initial, presence) std::vector<type> name;
+  MODSKILL_STEP_RESULT_FIELDS(MODSKILL_BUFFER_MEMBER)
+#undef MODSKILL_BUFFER_MEMBER
 
   void Allocate(const EnvSpec& spec, int envs) {
     num_envs = envs;
-    obs.assign(static_cast<size_t>(envs) * spec.obs_size, 0.f);
-    amp_obs.assign(static_cast<size_t>(envs) * spec.amp_obs_size, 0.f);
-    reward.assign(envs, 0.f);
-    reward_terms.assign(static_cast<size_t>(envs) * kNumRewardTerms, 0.f);
-    done.assign(envs, 0);
-    truncated.assign(envs, 0);
-    clip_id.assign(envs, 0);
-    frame.assign(envs, 0);
-    ended_clip_id.assign(envs, -1);
-    ended_frame.assign(envs, -1);
-    max_body_error.assign(envs, 0.f);
-    mean_body_error.assign(envs, 0.f);
-    num_parts = spec.layout.num_parts();
-    part_error.assign(static_cast<size_t>(envs) * num_parts, 0.f);
+    widths = WidthsOf(spec);
+#define MODSKILL_BUFFER_ALLOCATE(name, type, dtype, width, initial, presence) \
+  name.assign(static_cast<size_t>(envs) * RowSize(widths.width), static_cast<type>(initial));
+    MODSKILL_STEP_RESULT_FIELDS(MODSKILL_BUFFER_ALLOCATE)
+#undef MODSKILL_BUFFER_ALLOCATE
   }
+
+  // Values per env of a field of `width`.
+  static size_t RowSize(int64_t width) { return width == StepResultWidths::kVector ? 1 : static_cast<size_t>(width); }
 };
 
 }  // namespace modskill

@@ -9,14 +9,6 @@
 
 namespace modskill {
 
-absl::Status ValidateTerminationDistance(double distance) {
-  if (!(std::isfinite(distance) && distance > 0 && distance <= kMaxTerminationDistance)) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("termination_distance: ", distance, " m outside (0, ", kMaxTerminationDistance, "]"));
-  }
-  return absl::OkStatus();
-}
-
 absl::Status EnvBatch::SetTerminationDistance(double distance) {
   if (absl::Status status = ValidateTerminationDistance(distance); !status.ok()) return status;
   context_.config.termination_distance = distance;

@@ -18,10 +18,6 @@
 
 namespace modskill {
 
-inline constexpr double kMaxTerminationDistance = 100;  // m
-// A termination distance in (0, kMaxTerminationDistance] m.
-absl::Status ValidateTerminationDistance(double distance);
-
 struct EnvBatchConfig {
   int num_envs = 64;
   int num_threads = 1;

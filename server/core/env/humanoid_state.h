@@ -7,8 +7,8 @@
 
 #include <mujoco/mujoco.h>
 
-#include "server/core/sim/humanoid_model.h"
 #include "server/core/motion/motion_clip.h"
+#include "server/core/sim/humanoid_model.h"
 
 namespace modskill {
 

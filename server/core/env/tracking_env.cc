@@ -10,14 +10,6 @@
 
 namespace modskill {
 
-absl::StatusOr<TerminationBodies> ParseTerminationBodies(absl::string_view name) {
-  if (name == "all") return TerminationBodies::kAll;
-  if (name == "no_feet") return TerminationBodies::kNoFeet;
-  return absl::InvalidArgumentError(absl::StrCat("'", name.substr(0, 64), "' is not all or no_feet"));
-}
-
-std::vector<std::string> TerminationBodiesNames() { return {"all", "no_feet"}; }
-
 TrackingEnv::TrackingEnv(const EnvContext* context, uint64_t seed)
     : context_(context), data_(mj_makeData(context->humanoid->model())), pd_(*context->humanoid), rng_(seed) {
   const int bodies = context->humanoid->num_bodies(), hinges = context->humanoid->num_hinges();
@@ -108,8 +100,8 @@ void TrackingEnv::Step(const float* action, EnvRow row) {
     out.ended_frame[i] = frame_;
     out.max_body_error[i] = std::numeric_limits<float>::infinity();
     out.mean_body_error[i] = std::numeric_limits<float>::infinity();
-    float* part_error = &out.part_error[static_cast<size_t>(i) * out.num_parts];
-    std::fill(part_error, part_error + out.num_parts, std::numeric_limits<float>::infinity());
+    float* part_error = &out.part_error[static_cast<size_t>(i) * out.widths.parts];
+    std::fill(part_error, part_error + out.widths.parts, std::numeric_limits<float>::infinity());
     EndEpisode(row);
     return;
   }
@@ -122,7 +114,7 @@ void TrackingEnv::Step(const float* action, EnvRow row) {
   out.reward[i] = reward;
   out.max_body_error[i] = static_cast<float>(errors.max_body_distance);
   out.mean_body_error[i] = static_cast<float>(errors.mean_body_distance);
-  WritePartErrors(&out.part_error[static_cast<size_t>(i) * out.num_parts]);
+  WritePartErrors(&out.part_error[static_cast<size_t>(i) * out.widths.parts]);
 
   const bool terminated = Terminated(errors);
   const bool truncated = !terminated && (frame_ >= motion.num_frames - 1 ||

@@ -13,16 +13,17 @@
 
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
+#include "common/policy/termination.h"
+#include "server/core/curriculum/clip_sampler.h"
 #include "server/core/env/action_mapping.h"
 #include "server/core/env/batch_buffers.h"
-#include "server/core/curriculum/clip_sampler.h"
 #include "server/core/env/env_spec.h"
-#include "server/core/sim/humanoid_model.h"
 #include "server/core/env/humanoid_state.h"
 #include "server/core/env/imitation_reward.h"
-#include "server/core/motion/motion_library.h"
-#include "server/core/sim/pd_controller.h"
 #include "server/core/env/reference_amp.h"
+#include "server/core/motion/motion_library.h"
+#include "server/core/sim/humanoid_model.h"
+#include "server/core/sim/pd_controller.h"
 
 namespace modskill {
 
@@ -31,16 +32,6 @@ enum class TerminationMode {
   kEvaluation,  // mean body distance above `termination_distance` (0.5 m)
   kNone,        // only truncation at the clip's end
 };
-
-// Which bodies training termination watches.
-enum class TerminationBodies {
-  kAll,
-  kNoFeet,  // every body but the ankles and toes (PHC): feet slip without the character falling
-};
-
-// "all" / "no_feet": the names flags, configs and Describe use.
-absl::StatusOr<TerminationBodies> ParseTerminationBodies(absl::string_view name);
-std::vector<std::string> TerminationBodiesNames();
 
 struct TrackingEnvConfig {
   TerminationMode termination = TerminationMode::kTraining;

@@ -8,8 +8,8 @@
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
-#include "server/core/sim/humanoid_spec.h"
 #include "server/core/motion/resource_limits.h"
+#include "server/core/sim/humanoid_spec.h"
 #include "server/core/sim/rotation_math.h"
 
 namespace modskill {

@@ -8,9 +8,9 @@
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
 #include "server/core/motion/bvh_parser.h"
-#include "server/core/sim/humanoid_spec.h"
 #include "server/core/motion/motion_clip.h"
 #include "server/core/motion/resource_limits.h"
+#include "server/core/sim/humanoid_spec.h"
 
 namespace modskill {
 

@@ -1,4 +1,4 @@
-#include "server/service/policy_checkpoint.h"
+#include "common/policy/policy_checkpoint.h"
 
 #include <dlfcn.h>
 

@@ -2,8 +2,8 @@
 // [N, obs_size] to deterministic actions [N, action_size], with the env spec it was trained on
 // stored beside it in the archive (extra file "modskill/env_spec.json", PolicySpec in
 // policy_spec.h). The server runs it for rollouts; Python users can torch.jit.load it.
-#ifndef MODSKILL_SERVER_SERVICE_POLICY_CHECKPOINT_H_
-#define MODSKILL_SERVER_SERVICE_POLICY_CHECKPOINT_H_
+#ifndef MODSKILL_COMMON_POLICY_POLICY_CHECKPOINT_H_
+#define MODSKILL_COMMON_POLICY_POLICY_CHECKPOINT_H_
 
 #include <memory>
 #include <mutex>
@@ -12,7 +12,7 @@
 
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
-#include "server/service/policy_spec.h"
+#include "common/policy/policy_spec.h"
 
 namespace torch::jit {
 struct Module;
@@ -52,4 +52,4 @@ class PolicyCheckpoint {
 
 }  // namespace modskill
 
-#endif  // MODSKILL_SERVER_SERVICE_POLICY_CHECKPOINT_H_
+#endif  // MODSKILL_COMMON_POLICY_POLICY_CHECKPOINT_H_

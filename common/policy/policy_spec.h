@@ -1,8 +1,9 @@
 // The env spec a trained policy depends on, as stored in its checkpoint archive (extra file
 // "modskill/env_spec.json"). Torch-free, so that the archive's metadata can be read, tested and
-// fuzzed without linking torch; policy_checkpoint.h loads the archive around it.
-#ifndef MODSKILL_SERVER_SERVICE_POLICY_SPEC_H_
-#define MODSKILL_SERVER_SERVICE_POLICY_SPEC_H_
+// fuzzed without linking torch; policy_checkpoint.h loads the archive around it. The server
+// builds one from its env and checks a policy against it in server/core/env/policy_fit.h.
+#ifndef MODSKILL_COMMON_POLICY_POLICY_SPEC_H_
+#define MODSKILL_COMMON_POLICY_POLICY_SPEC_H_
 
 #include <string>
 #include <vector>
@@ -10,8 +11,7 @@
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
-#include "server/core/env/action_mapping.h"
-#include "server/core/env/env_spec.h"
+#include "common/policy/action_mode.h"
 
 namespace modskill {
 
@@ -31,15 +31,12 @@ struct PolicySpec {
   // were trained in absolute mode.
   ActionMapping action;
 
-  static PolicySpec FromEnvSpec(const EnvSpec& spec);
   std::string ToJson() const;
   // INVALID_ARGUMENT naming the field for anything but a JSON object whose sizes lie in
   // [1, kMaxPolicyVectorSize], control_dt in (0, 10) s and action mapping is valid.
   static absl::StatusOr<PolicySpec> FromJson(absl::string_view json);
-  // FAILED_PRECONDITION naming the first difference.
-  absl::Status CheckCompatible(const EnvSpec& server) const;
 };
 
 }  // namespace modskill
 
-#endif  // MODSKILL_SERVER_SERVICE_POLICY_SPEC_H_
+#endif  // MODSKILL_COMMON_POLICY_POLICY_SPEC_H_

@@ -1,6 +1,5 @@
-#include "server/service/policy_spec.h"
+#include "common/policy/policy_spec.h"
 
-#include <cmath>
 #include <cstdint>
 
 #include <nlohmann/json.hpp>
@@ -9,16 +8,6 @@
 #include "common/shown_value.h"
 
 namespace modskill {
-
-PolicySpec PolicySpec::FromEnvSpec(const EnvSpec& spec) {
-  PolicySpec policy;
-  policy.part_layout = spec.layout.name;
-  policy.obs_size = spec.obs_size;
-  policy.action_size = spec.action_size;
-  policy.joint_names = spec.joint_names;
-  policy.control_dt = spec.control_dt;
-  return policy;
-}
 
 std::string PolicySpec::ToJson() const {
   nlohmann::json json;
@@ -81,21 +70,6 @@ absl::StatusOr<PolicySpec> PolicySpec::FromJson(absl::string_view text) {
     return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": ", status.message()));
   }
   return spec;
-}
-
-absl::Status PolicySpec::CheckCompatible(const EnvSpec& server) const {
-  auto mismatch = [](absl::string_view field, const auto& mine, const auto& theirs) {
-    return absl::FailedPreconditionError(absl::StrCat("checkpoint: trained with ", field, " = ", mine,
-                                                      ", this server has ", theirs));
-  };
-  if (part_layout != server.layout.name) return mismatch("part_layout", part_layout, server.layout.name);
-  if (obs_size != server.obs_size) return mismatch("obs_size", obs_size, server.obs_size);
-  if (action_size != server.action_size) return mismatch("action_size", action_size, server.action_size);
-  if (std::abs(control_dt - server.control_dt) > 1e-9) return mismatch("control_dt", control_dt, server.control_dt);
-  if (joint_names != server.joint_names) {
-    return absl::FailedPreconditionError("checkpoint: trained with another joint order (joint_names differ)");
-  }
-  return absl::OkStatus();
 }
 
 }  // namespace modskill

@@ -1,0 +1,118 @@
+// The trainer's checkpoint (every network, optimizer and normalizer, the curriculum, counters)
+// and the shipped policy export.
+#include <sstream>
+#include <string>
+
+#include "absl/strings/str_cat.h"
+#include "common/atomic_file.h"
+#include "common/log.h"
+#include "learner/evaluation.h"
+#include "learner/policy_export.h"
+#include "learner/trainer.h"
+
+namespace modskill::learner {
+
+absl::Status Trainer::SaveCheckpoint(const std::string& path) {
+  try {
+    torch::serialize::OutputArchive archive;
+    auto add_module = [&](const char* key, const torch::nn::Module& module) {
+      torch::serialize::OutputArchive sub;
+      module.save(sub);
+      archive.write(key, sub);
+    };
+    add_module("policy", *policy_);
+    add_module("critic", *critic_);
+    add_module("discriminator", *discriminator_);
+    add_module("obs_norm", *obs_norm_);
+    add_module("amp_norm", *amp_norm_);
+    torch::serialize::OutputArchive optimizer, discriminator_optimizer;
+    optimizer_->save(optimizer);
+    discriminator_optimizer_->save(discriminator_optimizer);
+    archive.write("optimizer", optimizer);
+    archive.write("discriminator_optimizer", discriminator_optimizer);
+    archive.write("iteration", torch::tensor(static_cast<int64_t>(iteration_)));
+    archive.write("env_steps", torch::tensor(static_cast<int64_t>(env_steps_)));
+    archive.write("obs_size", torch::tensor(layout_.obs_size));
+    archive.write("action_size", torch::tensor(layout_.action_size));
+    archive.write("amp_obs_size", torch::tensor(layout_.amp_obs_size));
+    archive.write("action_mode", torch::tensor(static_cast<int64_t>(ActionModeOf(config_))));
+    archive.write("residual_scale", torch::tensor(config_.residual_scale, torch::kFloat64));
+    archive.write("termination_distance", torch::tensor(curriculum_.distance(), torch::kFloat64));
+    std::ostringstream out(std::ios::binary);
+    archive.save_to(out);
+    return WriteFileAtomically(path, out.str());
+  } catch (const std::exception& e) {
+    std::string message = e.what();
+    return absl::InternalError(absl::StrCat(path, ": cannot write checkpoint: ", message.substr(0, message.find('\n'))));
+  }
+}
+
+absl::Status Trainer::LoadCheckpoint(const std::string& path) {
+  auto bytes = ReadFileToString(path, size_t{4} << 30);
+  if (!bytes.ok()) return bytes.status();
+  try {
+    torch::serialize::InputArchive archive;
+    std::istringstream in(*bytes, std::ios::binary);
+    archive.load_from(in);
+    torch::Tensor obs_size, action_size, amp_obs_size, iteration, env_steps;
+    archive.read("obs_size", obs_size);
+    archive.read("action_size", action_size);
+    archive.read("amp_obs_size", amp_obs_size);
+    if (obs_size.item<int64_t>() != layout_.obs_size || action_size.item<int64_t>() != layout_.action_size ||
+        amp_obs_size.item<int64_t>() != layout_.amp_obs_size) {
+      return absl::FailedPreconditionError(
+          absl::StrCat(path, ": trained with obs ", obs_size.item<int64_t>(), ", actions ", action_size.item<int64_t>(),
+                       ", AMP obs ", amp_obs_size.item<int64_t>(), "; the server has ", layout_.obs_size, ", ",
+                       layout_.action_size, ", ", layout_.amp_obs_size));
+    }
+    auto load_module = [&](const char* key, torch::nn::Module& module) {
+      torch::serialize::InputArchive sub;
+      archive.read(key, sub);
+      module.load(sub);
+    };
+    // Checkpoints from before action modes were trained in absolute mode.
+    torch::Tensor action_mode = torch::tensor(static_cast<int64_t>(ActionMode::kAbsolute));
+    torch::Tensor residual_scale = torch::tensor(config_.residual_scale, torch::kFloat64);
+    archive.try_read("action_mode", action_mode);
+    archive.try_read("residual_scale", residual_scale);
+    const auto trained_mode = static_cast<ActionMode>(action_mode.item<int64_t>());
+    if (trained_mode != ActionModeOf(config_) ||
+        (trained_mode == ActionMode::kResidual && residual_scale.item<double>() != config_.residual_scale)) {
+      return absl::FailedPreconditionError(absl::StrCat(
+          path, ": trained with --action_mode ", ActionModeName(trained_mode),
+          trained_mode == ActionMode::kResidual ? absl::StrCat(" --residual_scale ", residual_scale.item<double>()) : "",
+          "; resume with the same flags"));
+    }
+    load_module("policy", *policy_);
+    load_module("critic", *critic_);
+    load_module("discriminator", *discriminator_);
+    load_module("obs_norm", *obs_norm_);
+    load_module("amp_norm", *amp_norm_);
+    torch::serialize::InputArchive optimizer, discriminator_optimizer;
+    archive.read("optimizer", optimizer);
+    archive.read("discriminator_optimizer", discriminator_optimizer);
+    optimizer_->load(optimizer);
+    discriminator_optimizer_->load(discriminator_optimizer);
+    archive.read("iteration", iteration);
+    archive.read("env_steps", env_steps);
+    torch::Tensor termination_distance;
+    if (archive.try_read("termination_distance", termination_distance)) {
+      curriculum_.set_distance(termination_distance.item<double>());
+    }
+    iteration_ = static_cast<int>(iteration.item<int64_t>());
+    env_steps_ = env_steps.item<int64_t>();
+  } catch (const std::exception& e) {
+    std::string message = e.what();
+    return absl::InvalidArgumentError(
+        absl::StrCat(path, ": not a loadable training checkpoint (different preset or layout?): ",
+                     message.substr(0, message.find('\n'))));
+  }
+  return absl::OkStatus();
+}
+
+absl::Status Trainer::ExportPolicy(const std::string& path) {
+  const PolicySpec spec = PolicySpecOf(spec_, ActionMapping{ActionModeOf(config_), config_.residual_scale});
+  return learner::ExportPolicy(policy_, obs_norm_, spec, path);
+}
+
+}  // namespace modskill::learner

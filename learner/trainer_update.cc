@@ -1,0 +1,218 @@
+// The update phases: GAE returns, the PPO policy and value update, the AMP discriminator update.
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "absl/strings/str_cat.h"
+#include "common/log.h"
+#include "learner/amp_loss.h"
+#include "learner/gae.h"
+#include "learner/ppo_loss.h"
+#include "learner/trainer.h"
+#include "learner/trainer_phases.h"
+#include "learner/wire_torch.h"
+
+namespace modskill::learner {
+namespace {
+
+bool AllFinite(const std::vector<torch::Tensor>& tensors) {
+  for (const torch::Tensor& t : tensors) {
+    if (!torch::isfinite(t).all().item<bool>()) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+Trainer::TrainingBatch Trainer::ComputeReturns(const std::vector<SlotRollout*>& usable) {
+  torch::NoGradGuard no_grad;
+  const int T = config_.horizon;
+  const int64_t O = layout_.obs_size, A = layout_.action_size, M = layout_.amp_obs_size;
+  TrainingBatch batch;
+  batch.terms_sum = torch::zeros({spec_.reward_terms_size()}, torch::kFloat64);
+  std::vector<torch::Tensor> obs, actions, log_prob, values, advantages, returns, raw_obs, amp_rows, live_rows;
+  for (SlotRollout* r : usable) {
+    // Reward: the server's task reward (imitation + energy) and the AMP style reward.
+    const torch::Tensor amp_flat = r->amp_next.reshape({-1, M});
+    const torch::Tensor amp_reward =
+        AmpReward(discriminator_->forward(amp_norm_->Normalize(amp_flat))).reshape({T, r->n}) * (1 - r->dones);
+    const torch::Tensor last_values = critic_->forward(obs_norm_->Normalize(r->next_obs));
+    // Time-outs bootstrap from the value of the state they ended in (rl_games' trick: the
+    // row's next observation already belongs to the next episode).
+    const torch::Tensor rewards = config_.task_reward_weight * r->task_reward +
+                                  config_.amp_reward_weight * amp_reward + config_.gamma * r->values * r->truncated;
+    torch::Tensor slot_advantages, slot_returns;
+    ComputeGae(rewards, r->values, r->dones, last_values, config_.gamma, config_.lambda, &slot_advantages,
+               &slot_returns);
+    obs.push_back(r->obs.reshape({-1, O}));
+    actions.push_back(r->actions.reshape({-1, A}));
+    log_prob.push_back(r->log_prob.reshape({-1}));
+    values.push_back(r->values.reshape({-1}));
+    advantages.push_back(slot_advantages.reshape({-1}));
+    returns.push_back(slot_returns.reshape({-1}));
+    amp_rows.push_back(amp_flat);
+    live_rows.push_back((r->dones.reshape({-1}) < 0.5).nonzero().squeeze(1));
+    raw_obs.insert(raw_obs.end(), r->raw_obs.begin(), r->raw_obs.end());
+    batch.task_sum += r->task_reward.sum().item<double>();
+    batch.amp_sum += amp_reward.sum().item<double>();
+    batch.samples += static_cast<double>(T) * r->n;
+    batch.terms_sum += r->reward_terms_sum;
+  }
+  batch.obs = torch::cat(obs);
+  batch.actions = torch::cat(actions);
+  batch.old_log_prob = torch::cat(log_prob);
+  batch.old_values = torch::cat(values);
+  batch.advantages = NormalizeAdvantages(torch::cat(advantages));
+  batch.returns = torch::cat(returns);
+  batch.policy_amp = SampleLiveAmp(amp_rows, live_rows);
+  batch.raw_obs = torch::cat(raw_obs);
+  batch.live_sessions = static_cast<int>(usable.size());
+  return batch;
+}
+
+void Trainer::CenterOnCurrentPolicy(TrainingBatch* batch) {
+  torch::NoGradGuard no_grad;
+  std::vector<torch::Tensor> proximal;
+  const torch::Tensor log_std = policy_->log_std();
+  const int64_t size = batch->obs.size(0), chunk = 4096;
+  for (int64_t begin = 0; begin < size; begin += chunk) {
+    const int64_t end = std::min(size, begin + chunk);
+    proximal.push_back(ModSkillPolicyImpl::LogProb(policy_->forward(batch->obs.slice(0, begin, end)), log_std,
+                                                   batch->actions.slice(0, begin, end)));
+  }
+  const torch::Tensor proximal_log_prob = torch::cat(proximal);
+  batch->advantages = DecoupledAdvantages(batch->advantages, proximal_log_prob, batch->old_log_prob);
+  batch->old_log_prob = proximal_log_prob;
+}
+
+torch::Tensor Trainer::SampleLiveAmp(const std::vector<torch::Tensor>& amp_rows,
+                                    const std::vector<torch::Tensor>& live_rows) {
+  int64_t live = 0;
+  for (const torch::Tensor& rows : live_rows) live += rows.size(0);
+  if (live == 0) return torch::zeros({0, layout_.amp_obs_size});
+  const int64_t wanted = static_cast<int64_t>(config_.amp_samples) * config_.discriminator_epochs;
+  const torch::Tensor pick = torch::randint(live, {wanted}, generator_, torch::kLong);
+  std::vector<torch::Tensor> picked;
+  int64_t offset = 0;
+  for (size_t s = 0; s < amp_rows.size(); ++s) {
+    const int64_t count = live_rows[s].size(0);
+    const torch::Tensor mine = pick.masked_select((pick >= offset) & (pick < offset + count)) - offset;
+    picked.push_back(amp_rows[s].index_select(0, live_rows[s].index_select(0, mine)));
+    offset += count;
+  }
+  const torch::Tensor samples = torch::cat(picked);  // grouped by session: shuffle
+  return samples.index_select(0, torch::randperm(samples.size(0), generator_));
+}
+
+// PPO (Schulman et al. 2017). A non-finite loss skips its minibatch; non-finite weights after the
+// update roll back to the weights it started from. Iterate gives the update phases
+// config.update_threads torch threads while the servers wait.
+void Trainer::UpdatePolicy(const TrainingBatch& batch, IterationStats* stats) {
+  std::vector<torch::Tensor> snapshot;
+  for (const torch::Tensor& p : optimizer_->param_groups()[0].params()) snapshot.push_back(p.detach().clone());
+  const torch::Tensor log_std = policy_->log_std();
+  double policy_loss = 0, value_loss = 0, approx_kl = 0, clip_fraction = 0;
+  int updates = 0;
+  const int64_t size = batch.obs.size(0);
+  const int64_t minibatch = std::min<int64_t>(config_.minibatch_size, size);
+  for (int epoch = 0; epoch < config_.epochs; ++epoch) {
+    const torch::Tensor order = torch::randperm(size, generator_);
+    for (int64_t begin = 0; begin + minibatch <= size; begin += minibatch) {
+      const torch::Tensor index = order.slice(0, begin, begin + minibatch);
+      const torch::Tensor obs = batch.obs.index_select(0, index);
+      const torch::Tensor new_log_prob =
+          ModSkillPolicyImpl::LogProb(policy_->forward(obs), log_std, batch.actions.index_select(0, index));
+      PpoLossTerms loss = ComputePpoLoss(new_log_prob, batch.old_log_prob.index_select(0, index),
+                                         batch.advantages.index_select(0, index), critic_->forward(obs),
+                                         batch.old_values.index_select(0, index), batch.returns.index_select(0, index),
+                                         config_.clip_ratio, config_.value_clip, config_.value_coefficient);
+      if (!std::isfinite(loss.total.item<double>())) {
+        ++stats->skipped_updates;
+        continue;
+      }
+      optimizer_->zero_grad();
+      loss.total.backward();
+      torch::nn::utils::clip_grad_norm_(optimizer_->param_groups()[0].params(), config_.max_grad_norm);
+      optimizer_->step();
+      policy_loss += loss.policy_loss.item<double>();
+      value_loss += loss.value_loss.item<double>();
+      approx_kl += loss.approx_kl.item<double>();
+      clip_fraction += loss.clip_fraction.item<double>();
+      ++updates;
+    }
+  }
+  if (!AllFinite(optimizer_->param_groups()[0].params())) {
+    torch::NoGradGuard no_grad;
+    auto& params = optimizer_->param_groups()[0].params();
+    for (size_t i = 0; i < params.size(); ++i) params[i].copy_(snapshot[i]);
+    LogLine("iteration %d: non-finite weights after the update; kept the last good ones", iteration_ + 1);
+    ++stats->skipped_updates;
+  }
+  if (stats->skipped_updates > 0) {
+    LogLine("iteration %d: skipped %d updates with a non-finite loss", iteration_ + 1, stats->skipped_updates);
+  }
+  if (updates > 0) {
+    stats->policy_loss = policy_loss / updates;
+    stats->value_loss = value_loss / updates;
+    stats->approx_kl = approx_kl / updates;
+    stats->clip_fraction = clip_fraction / updates;
+  }
+  obs_norm_->Update(batch.raw_obs);
+}
+
+torch::Tensor Trainer::FetchReferenceAmp(SessionSlot* source) {
+  const int64_t M = layout_.amp_obs_size;
+  v1::SampleReferenceAmpRequest request;
+  request.set_session_id(source->stream->opened().session_id());
+  request.set_num_samples(config_.amp_samples);
+  request.set_seed(config_.seed * 1000003 + iteration_);
+  auto reference = source->client->SampleReferenceAmp(request);
+  if (!reference.ok()) {
+    LogLine("iteration %d: no reference AMP samples (%s); discriminator not updated", iteration_ + 1,
+            reference.status().message());
+    return torch::zeros({0, M});
+  }
+  absl::StatusOr<torch::Tensor> expert =
+      WireToTorch(reference->amp_obs(), "SampleReferenceAmp.amp_obs", v1::FLOAT32, {config_.amp_samples, M});
+  if (!expert.ok()) {
+    LogLine("reference AMP samples unusable, discriminator step skipped: %s",
+            std::string(expert.status().message()).c_str());
+    return torch::zeros({0, M});
+  }
+  return *expert;
+}
+
+void Trainer::UpdateDiscriminator(const TrainingBatch& batch, const torch::Tensor& expert, IterationStats* stats) {
+  if (batch.policy_amp.size(0) == 0 || expert.size(0) == 0) return;
+  amp_norm_->Update(torch::cat({expert, batch.policy_amp}));
+  double loss_sum = 0, expert_logit = 0, policy_logit = 0, penalty = 0;
+  const torch::Tensor expert_normalized = amp_norm_->Normalize(expert).detach();
+  for (int epoch = 0; epoch < config_.discriminator_epochs; ++epoch) {
+    // A fresh leaf each epoch: the gradient penalty differentiates through it.
+    const torch::Tensor expert_in = expert_normalized.detach().requires_grad_(true);
+    const torch::Tensor policy_in =
+        amp_norm_->Normalize(batch.policy_amp.slice(0, epoch * config_.amp_samples, (epoch + 1) * config_.amp_samples));
+    const torch::Tensor gradient_penalty = discriminator_->GradientPenalty(expert_in);
+    AmpLossTerms loss = ComputeAmpLoss(discriminator_->forward(expert_in), discriminator_->forward(policy_in),
+                                       gradient_penalty, config_.gradient_penalty_weight);
+    if (!std::isfinite(loss.total.item<double>())) {
+      ++stats->skipped_updates;
+      continue;
+    }
+    discriminator_optimizer_->zero_grad();
+    loss.total.backward();
+    discriminator_optimizer_->step();
+    loss_sum += loss.total.item<double>();
+    expert_logit += loss.expert_logit_mean.item<double>();
+    policy_logit += loss.policy_logit_mean.item<double>();
+    penalty += loss.gradient_penalty.item<double>();
+  }
+  const double epochs = config_.discriminator_epochs;
+  stats->discriminator_loss = loss_sum / epochs;
+  stats->expert_logit = expert_logit / epochs;
+  stats->policy_logit = policy_logit / epochs;
+  stats->gradient_penalty = penalty / epochs;
+}
+
+}  // namespace modskill::learner

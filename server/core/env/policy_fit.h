@@ -1,0 +1,20 @@
+// A policy file against the env it is asked to drive: the spec a policy trained on this env
+// records, and the check that a loaded policy's spec matches the server's env.
+#ifndef MODSKILL_SERVER_CORE_ENV_POLICY_FIT_H_
+#define MODSKILL_SERVER_CORE_ENV_POLICY_FIT_H_
+
+#include "absl/status/status.h"
+#include "common/policy/policy_spec.h"
+#include "server/core/env/env_spec.h"
+
+namespace modskill {
+
+// The env's layout, sizes, joint order and control step; the action mapping left at its default.
+PolicySpec PolicySpecForEnv(const EnvSpec& spec);
+
+// FAILED_PRECONDITION naming the first difference (layout, sizes, control step, joint order).
+absl::Status CheckPolicyFitsEnv(const PolicySpec& policy, const EnvSpec& server);
+
+}  // namespace modskill
+
+#endif  // MODSKILL_SERVER_CORE_ENV_POLICY_FIT_H_
