@@ -15,6 +15,7 @@ PACKAGES=(
   openssl  # tests/tls_server_test makes a throwaway CA and certificates with it
   clang libfuzzer-14-dev  # the fuzz targets deploy/test.sh runs (fuzz/run.sh, build-fuzz/)
   python3-grpcio python3-numpy python3-matplotlib
+  python3-venv python3-pip python3-setuptools python3-wheel  # pip install ./client/python, offline
 )
 
 missing=()

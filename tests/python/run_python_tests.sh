@@ -3,9 +3,11 @@
 #
 #   tests/python/run_python_tests.sh BUILD_DIR
 #
-# BUILD_DIR must hold server/modskill-server, tests/make_test_policy and python/modskill (the
-# targets modskill-server, make_test_policy and modskill_python). Exits 77 (skipped) when
-# Debian's /usr/bin/python3 lacks grpc or numpy; otherwise with the unittest status.
+# BUILD_DIR must hold server/modskill-server and tests/make_test_policy (the targets
+# modskill-server and make_test_policy). The package is imported from the source tree,
+# client/python (its generated stubs are committed; test_install.py checks they match the proto).
+# Exits 77 (skipped) when Debian's /usr/bin/python3 lacks grpc or numpy; otherwise with the
+# unittest status.
 set -u
 
 PYTHON=/usr/bin/python3
@@ -23,10 +25,10 @@ fi
 
 SERVER="$BUILD_DIR/server/modskill-server"
 MAKE_POLICY="$BUILD_DIR/tests/make_test_policy"
-for needed in "$SERVER" "$MAKE_POLICY" "$BUILD_DIR/python/modskill/__init__.py" \
-              "$BUILD_DIR/python/modskill/v1/modskill_pb2_grpc.py"; do
+PACKAGE_DIR="$REPO_DIR/client/python"
+for needed in "$SERVER" "$MAKE_POLICY"; do
   if [ ! -e "$needed" ]; then
-    echo "run_python_tests: missing $needed (build modskill-server make_test_policy modskill_python)" >&2
+    echo "run_python_tests: missing $needed (build modskill-server make_test_policy)" >&2
     exit 1
   fi
 done
@@ -65,7 +67,7 @@ while [ "$SECONDS" -lt "$deadline" ]; do
   if ! kill -0 "$SERVER_PID" 2>/dev/null; then
     break
   fi
-  if PYTHONPATH="$BUILD_DIR/python" "$PYTHON" -c '
+  if PYTHONPATH="$PACKAGE_DIR" "$PYTHON" -c '
 import sys, modskill
 modskill.Client(sys.argv[1], timeout=0.5).describe()' "$ADDRESS" >/dev/null 2>&1; then
     ready=1
@@ -86,7 +88,7 @@ if ! "$MAKE_POLICY" "$CHECKPOINT"; then
 fi
 
 cd "$REPO_DIR"
-PYTHONPATH="$BUILD_DIR/python" MODSKILL_SERVER="$ADDRESS" MODSKILL_TEST_CHECKPOINT="$CHECKPOINT" \
+PYTHONPATH="$PACKAGE_DIR" MODSKILL_SERVER="$ADDRESS" MODSKILL_TEST_CHECKPOINT="$CHECKPOINT" \
   MODSKILL_SERVER_BINARY="$SERVER" MODSKILL_TEST_WORK_DIR="$WORK_DIR" MPLBACKEND=Agg PYTHONDONTWRITEBYTECODE=1 \
   "$PYTHON" -m unittest discover -s tests/python -p 'test_*.py' -v
 status=$?

@@ -5,7 +5,7 @@ Run by tests/python/run_python_tests.sh, which starts a server and sets:
   MODSKILL_TEST_CHECKPOINT   a zero-policy checkpoint written by make_test_policy
   MODSKILL_SERVER_BINARY     the server binary (for the token test, which starts its own server)
   MODSKILL_TEST_WORK_DIR     a scratch directory removed afterwards
-and PYTHONPATH=<build>/python.
+and PYTHONPATH=client/python.
 """
 
 import dataclasses
@@ -372,7 +372,9 @@ class TokenTest(unittest.TestCase):
 @unittest.skipUnless(SERVER, "MODSKILL_SERVER is not set (run tests/python/run_python_tests.sh)")
 class ExamplesTest(unittest.TestCase):
     def run_example(self, name, *args):
-        env = dict(os.environ, MPLBACKEND="Agg")
+        # As documented, from a fresh clone: no PYTHONPATH (examples/_path.py finds client/python).
+        env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+        env["MPLBACKEND"] = "Agg"
         process = subprocess.run([PYTHON, os.path.join(EXAMPLES_DIR, name), "--server", SERVER, *args],
                                  stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env, timeout=60)
         output = process.stdout.decode("utf-8", "replace")
@@ -400,6 +402,12 @@ class ExamplesTest(unittest.TestCase):
     def test_random_actions(self):
         output = self.run_example("random_actions.py", "--num_envs", "4", "--steps", "5")
         self.assertIn("steps/s", output)
+
+    def test_train_numpy(self):
+        output = self.run_example("train_numpy.py", "--iterations", "2", "--directions", "1",
+                                  "--envs_per_candidate", "2", "--horizon", "5")
+        self.assertIn("iteration 2: return", output)
+        self.assertRegex(output, r"final return -?[0-9.]+ over 6 envs x 5 steps")
 
 
 if __name__ == "__main__":

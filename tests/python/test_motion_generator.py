@@ -1,9 +1,9 @@
 """Tests of the example MotionGenerator service (client/python/examples/motion_generator_service.py).
 
 Each test class starts the service as a subprocess on a free port and calls it with a plain gRPC
-stub; no modskill server is needed. Run with PYTHONPATH=<build>/python:
+stub; no modskill server is needed. Run with PYTHONPATH=client/python:
 
-    PYTHONPATH=build/python /usr/bin/python3 -m unittest tests/python/test_motion_generator.py -v
+    PYTHONPATH=client/python /usr/bin/python3 -m unittest tests/python/test_motion_generator.py -v
 """
 
 import os

@@ -1,5 +1,6 @@
-"""Lets the examples run from a source checkout: when ``import modskill`` fails, they look for
-the built package in ``<repo>/build/python`` (made by ``make modskill_python``)."""
+"""Lets the examples run from a source checkout: when ``import modskill`` fails (the package is
+not installed), they import it from ``<repo>/client/python``, which holds the generated protocol
+modules too (``modskill/v1``, committed)."""
 
 import importlib
 import os
@@ -12,9 +13,8 @@ def ensure_modskill_importable() -> None:
         return
     except ImportError:
         pass
-    repo = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
-    candidate = os.path.join(repo, "build", "python")
-    if os.path.isdir(os.path.join(candidate, "modskill", "v1")):
-        sys.path.insert(0, candidate)
+    package_dir = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
+    if os.path.isfile(os.path.join(package_dir, "modskill", "v1", "modskill_pb2_grpc.py")):
+        sys.path.insert(0, package_dir)
         return
-    sys.exit("cannot import modskill: build it (make modskill_python) and set PYTHONPATH=<build>/python")
+    sys.exit("cannot import modskill: pip install ./client/python (see client/python/README.md)")

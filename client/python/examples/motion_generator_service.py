@@ -7,7 +7,7 @@ deployment would run a text-to-motion model (MDM, T2M-GPT, ...) in ``Generate`` 
 on ``request.text`` and constrained to ``request.part_mask``; this example only shows the contract:
 same skeleton, frame count, fps and root, unit quaternions, unmasked bodies left alone.
 
-    PYTHONPATH=build/python /usr/bin/python3 client/python/examples/motion_generator_service.py --port 50061
+    /usr/bin/python3 client/python/examples/motion_generator_service.py --port 50061
 """
 
 import argparse

@@ -6,7 +6,7 @@ clips of its motion library.
 This is the first thing to run against a new server: clients never hard-code sizes, they read
 them from ``Client.describe()`` as shown here.
 
-    PYTHONPATH=build/python /usr/bin/python3 client/python/examples/print_spec.py --server 127.0.0.1:50051
+    /usr/bin/python3 client/python/examples/print_spec.py --server 127.0.0.1:50051
 """
 
 import argparse

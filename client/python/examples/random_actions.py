@@ -7,7 +7,7 @@ It shows the basic training-loop shape: ``Client.session()`` returns the first o
 ``Session.step(actions)`` returns numpy arrays (obs, reward, done, ...) for all envs at once,
 and episodes that end are reset by the server in the same step.
 
-    PYTHONPATH=build/python /usr/bin/python3 client/python/examples/random_actions.py --num_envs 256 --steps 200
+    /usr/bin/python3 client/python/examples/random_actions.py --num_envs 256 --steps 200
 """
 
 import argparse

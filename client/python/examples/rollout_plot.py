@@ -7,7 +7,7 @@ termination and streams the simulated and reference body positions of every step
 time (top) and the mean error per body, coloured by body part (bottom); the clip's metrics
 are printed.
 
-    PYTHONPATH=build/python /usr/bin/python3 client/python/examples/rollout_plot.py \\
+    /usr/bin/python3 client/python/examples/rollout_plot.py \\
         --checkpoint policy.pt --clip deepmimic_walk --out error.png
 """
 

@@ -12,9 +12,14 @@ numpy arrays.
         result.obs, result.reward, result.done  # numpy arrays, row i = env i
     client.rollout("policy.pt", clips=["deepmimic_walk"], frames=True)
 
+    with modskill.VectorEnv("127.0.0.1:50051", num_envs=16) as env:   # Gymnasium-style
+        obs, info = env.reset(seed=0)
+        obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
+
 Main names:
   Client       connection; describe, motions, stats, add_motions, rollout, report_failures, session
   Session      an open simulation stream: spec, clip_names, initial, step(actions), part_obs
+  VectorEnv    a session with Gymnasium's vector-env interface (reset, step, spaces; Box)
   EnvSpec, BodyPart, StepResult, ClipRollout   the results
   ServerError  a failed call (``.code``: grpc.StatusCode, ``.message``: the server's message)
   ConnectError no server at the address (a ServerError with code UNAVAILABLE)
@@ -25,12 +30,15 @@ The generated protocol modules are ``modskill.v1.modskill_pb2`` and ``modskill_p
 from .client import Client, Session, read_token_file
 from .errors import ConnectError, ServerError
 from .types import BodyPart, ClipRollout, EnvSpec, StepResult
+from .vector_env import Box, VectorEnv
 
 __version__ = "0.1.0"
 
 __all__ = [
     "Client",
     "Session",
+    "VectorEnv",
+    "Box",
     "ServerError",
     "ConnectError",
     "EnvSpec",
