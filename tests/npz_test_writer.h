@@ -74,92 +74,13 @@ class NpzWriter {
     std::string archive;
     std::string directory;
     for (const Member& member : members_) {
-      const std::string stored = compress ? Deflate(member.bytes) : member.bytes;
-      const uint32_t crc =
-          static_cast<uint32_t>(crc32(0, reinterpret_cast<const Bytef*>(member.bytes.data()),
-                                      static_cast<uInt>(member.bytes.size())));
-      const uint16_t method = compress ? 8 : 0;
-      const uint64_t header_offset = archive.size();
-
-      std::string local_extra;
-      if (zip64_records) {
-        AppendLittleEndian(&local_extra, 1, 2);
-        AppendLittleEndian(&local_extra, 16, 2);
-        AppendLittleEndian(&local_extra, member.bytes.size(), 8);
-        AppendLittleEndian(&local_extra, stored.size(), 8);
-      }
-      AppendLittleEndian(&archive, 0x04034b50, 4);
-      AppendLittleEndian(&archive, zip64_records ? 45 : 20, 2);  // version needed
-      AppendLittleEndian(&archive, 0, 2);                        // flags
-      AppendLittleEndian(&archive, method, 2);
-      AppendLittleEndian(&archive, 0, 2);       // time 00:00:00
-      AppendLittleEndian(&archive, 0x0021, 2);  // date 1980-01-01
-      AppendLittleEndian(&archive, crc, 4);
-      AppendLittleEndian(&archive, zip64_records ? 0xFFFFFFFFu : stored.size(), 4);
-      AppendLittleEndian(&archive, zip64_records ? 0xFFFFFFFFu : member.bytes.size(), 4);
-      AppendLittleEndian(&archive, member.name.size(), 2);
-      AppendLittleEndian(&archive, local_extra.size(), 2);
-      archive += member.name;
-      archive += local_extra;
-      archive += stored;
-
-      std::string central_extra;
-      if (zip64_records) {
-        AppendLittleEndian(&central_extra, 1, 2);
-        AppendLittleEndian(&central_extra, 24, 2);
-        AppendLittleEndian(&central_extra, member.bytes.size(), 8);
-        AppendLittleEndian(&central_extra, stored.size(), 8);
-        AppendLittleEndian(&central_extra, header_offset, 8);
-      }
-      AppendLittleEndian(&directory, 0x02014b50, 4);
-      AppendLittleEndian(&directory, zip64_records ? 45 : 20, 2);  // version made by
-      AppendLittleEndian(&directory, zip64_records ? 45 : 20, 2);  // version needed
-      AppendLittleEndian(&directory, 0, 2);                        // flags
-      AppendLittleEndian(&directory, method, 2);
-      AppendLittleEndian(&directory, 0, 2);
-      AppendLittleEndian(&directory, 0x0021, 2);
-      AppendLittleEndian(&directory, crc, 4);
-      AppendLittleEndian(&directory, zip64_records ? 0xFFFFFFFFu : stored.size(), 4);
-      AppendLittleEndian(&directory, zip64_records ? 0xFFFFFFFFu : member.bytes.size(), 4);
-      AppendLittleEndian(&directory, member.name.size(), 2);
-      AppendLittleEndian(&directory, central_extra.size(), 2);
-      AppendLittleEndian(&directory, 0, 2);  // comment length
-      AppendLittleEndian(&directory, 0, 2);  // disk number
-      AppendLittleEndian(&directory, 0, 2);  // internal attributes
-      AppendLittleEndian(&directory, 0, 4);  // external attributes
-      AppendLittleEndian(&directory, zip64_records ? 0xFFFFFFFFu : header_offset, 4);
-      directory += member.name;
-      directory += central_extra;
+      const StoredMember stored = Store(member, compress, archive.size());
+      AppendLocalEntry(member, stored, zip64_records, &archive);
+      AppendCentralEntry(member, stored, zip64_records, &directory);
     }
     const uint64_t directory_offset = archive.size();
     archive += directory;
-
-    if (zip64_records) {
-      const uint64_t zip64_end_offset = archive.size();
-      AppendLittleEndian(&archive, 0x06064b50, 4);
-      AppendLittleEndian(&archive, 44, 8);  // size of the rest of this record
-      AppendLittleEndian(&archive, 45, 2);
-      AppendLittleEndian(&archive, 45, 2);
-      AppendLittleEndian(&archive, 0, 4);  // this disk
-      AppendLittleEndian(&archive, 0, 4);  // disk with the central directory
-      AppendLittleEndian(&archive, members_.size(), 8);
-      AppendLittleEndian(&archive, members_.size(), 8);
-      AppendLittleEndian(&archive, directory.size(), 8);
-      AppendLittleEndian(&archive, directory_offset, 8);
-
-      AppendLittleEndian(&archive, 0x07064b50, 4);
-      AppendLittleEndian(&archive, 0, 4);  // disk with the zip64 end record
-      AppendLittleEndian(&archive, zip64_end_offset, 8);
-      AppendLittleEndian(&archive, 1, 4);  // total disks
-    }
-    AppendLittleEndian(&archive, 0x06054b50, 4);
-    AppendLittleEndian(&archive, 0, 2);  // this disk
-    AppendLittleEndian(&archive, 0, 2);  // disk with the central directory
-    AppendLittleEndian(&archive, zip64_records ? 0xFFFFu : members_.size(), 2);
-    AppendLittleEndian(&archive, zip64_records ? 0xFFFFu : members_.size(), 2);
-    AppendLittleEndian(&archive, zip64_records ? 0xFFFFFFFFu : directory.size(), 4);
-    AppendLittleEndian(&archive, zip64_records ? 0xFFFFFFFFu : directory_offset, 4);
-    AppendLittleEndian(&archive, 0, 2);  // comment length
+    AppendEndRecords(directory.size(), directory_offset, zip64_records, &archive);
     return archive;
   }
 
@@ -179,6 +100,115 @@ class NpzWriter {
     std::string name;
     std::string bytes;
   };
+
+  // A member as the archive holds it: its bytes after compression, and what the headers say.
+  struct StoredMember {
+    std::string data;
+    uint32_t crc = 0;
+    uint16_t method = 0;  // 0 stored, 8 deflated
+    uint64_t header_offset = 0;
+  };
+
+  static StoredMember Store(const Member& member, bool compress, uint64_t header_offset) {
+    StoredMember stored;
+    stored.data = compress ? Deflate(member.bytes) : member.bytes;
+    stored.crc =
+        static_cast<uint32_t>(crc32(0, reinterpret_cast<const Bytef*>(member.bytes.data()),
+                                    static_cast<uInt>(member.bytes.size())));
+    stored.method = compress ? 8 : 0;
+    stored.header_offset = header_offset;
+    return stored;
+  }
+
+  // The local file header, its zip64 extra field if asked for, then the stored data.
+  static void AppendLocalEntry(const Member& member, const StoredMember& stored,
+                               bool zip64_records, std::string* archive) {
+    std::string local_extra;
+    if (zip64_records) {
+      AppendLittleEndian(&local_extra, 1, 2);
+      AppendLittleEndian(&local_extra, 16, 2);
+      AppendLittleEndian(&local_extra, member.bytes.size(), 8);
+      AppendLittleEndian(&local_extra, stored.data.size(), 8);
+    }
+    AppendLittleEndian(archive, 0x04034b50, 4);
+    AppendLittleEndian(archive, zip64_records ? 45 : 20, 2);  // version needed
+    AppendLittleEndian(archive, 0, 2);                        // flags
+    AppendLittleEndian(archive, stored.method, 2);
+    AppendLittleEndian(archive, 0, 2);       // time 00:00:00
+    AppendLittleEndian(archive, 0x0021, 2);  // date 1980-01-01
+    AppendLittleEndian(archive, stored.crc, 4);
+    AppendLittleEndian(archive, zip64_records ? 0xFFFFFFFFu : stored.data.size(), 4);
+    AppendLittleEndian(archive, zip64_records ? 0xFFFFFFFFu : member.bytes.size(), 4);
+    AppendLittleEndian(archive, member.name.size(), 2);
+    AppendLittleEndian(archive, local_extra.size(), 2);
+    *archive += member.name;
+    *archive += local_extra;
+    *archive += stored.data;
+  }
+
+  // The member's central directory header, with its zip64 extra field if asked for.
+  static void AppendCentralEntry(const Member& member, const StoredMember& stored,
+                                 bool zip64_records, std::string* directory) {
+    std::string central_extra;
+    if (zip64_records) {
+      AppendLittleEndian(&central_extra, 1, 2);
+      AppendLittleEndian(&central_extra, 24, 2);
+      AppendLittleEndian(&central_extra, member.bytes.size(), 8);
+      AppendLittleEndian(&central_extra, stored.data.size(), 8);
+      AppendLittleEndian(&central_extra, stored.header_offset, 8);
+    }
+    AppendLittleEndian(directory, 0x02014b50, 4);
+    AppendLittleEndian(directory, zip64_records ? 45 : 20, 2);  // version made by
+    AppendLittleEndian(directory, zip64_records ? 45 : 20, 2);  // version needed
+    AppendLittleEndian(directory, 0, 2);                        // flags
+    AppendLittleEndian(directory, stored.method, 2);
+    AppendLittleEndian(directory, 0, 2);
+    AppendLittleEndian(directory, 0x0021, 2);
+    AppendLittleEndian(directory, stored.crc, 4);
+    AppendLittleEndian(directory, zip64_records ? 0xFFFFFFFFu : stored.data.size(), 4);
+    AppendLittleEndian(directory, zip64_records ? 0xFFFFFFFFu : member.bytes.size(), 4);
+    AppendLittleEndian(directory, member.name.size(), 2);
+    AppendLittleEndian(directory, central_extra.size(), 2);
+    AppendLittleEndian(directory, 0, 2);  // comment length
+    AppendLittleEndian(directory, 0, 2);  // disk number
+    AppendLittleEndian(directory, 0, 2);  // internal attributes
+    AppendLittleEndian(directory, 0, 4);  // external attributes
+    AppendLittleEndian(directory, zip64_records ? 0xFFFFFFFFu : stored.header_offset, 4);
+    *directory += member.name;
+    *directory += central_extra;
+  }
+
+  // After the central directory: the zip64 end record and locator if asked for, then the end
+  // of central directory record.
+  void AppendEndRecords(uint64_t directory_size, uint64_t directory_offset, bool zip64_records,
+                        std::string* archive) const {
+    if (zip64_records) {
+      const uint64_t zip64_end_offset = archive->size();
+      AppendLittleEndian(archive, 0x06064b50, 4);
+      AppendLittleEndian(archive, 44, 8);  // size of the rest of this record
+      AppendLittleEndian(archive, 45, 2);
+      AppendLittleEndian(archive, 45, 2);
+      AppendLittleEndian(archive, 0, 4);  // this disk
+      AppendLittleEndian(archive, 0, 4);  // disk with the central directory
+      AppendLittleEndian(archive, members_.size(), 8);
+      AppendLittleEndian(archive, members_.size(), 8);
+      AppendLittleEndian(archive, directory_size, 8);
+      AppendLittleEndian(archive, directory_offset, 8);
+
+      AppendLittleEndian(archive, 0x07064b50, 4);
+      AppendLittleEndian(archive, 0, 4);  // disk with the zip64 end record
+      AppendLittleEndian(archive, zip64_end_offset, 8);
+      AppendLittleEndian(archive, 1, 4);  // total disks
+    }
+    AppendLittleEndian(archive, 0x06054b50, 4);
+    AppendLittleEndian(archive, 0, 2);  // this disk
+    AppendLittleEndian(archive, 0, 2);  // disk with the central directory
+    AppendLittleEndian(archive, zip64_records ? 0xFFFFu : members_.size(), 2);
+    AppendLittleEndian(archive, zip64_records ? 0xFFFFu : members_.size(), 2);
+    AppendLittleEndian(archive, zip64_records ? 0xFFFFFFFFu : directory_size, 4);
+    AppendLittleEndian(archive, zip64_records ? 0xFFFFFFFFu : directory_offset, 4);
+    AppendLittleEndian(archive, 0, 2);  // comment length
+  }
 
   template <typename T>
   void AddNumeric(const std::string& name, const std::string& descr,

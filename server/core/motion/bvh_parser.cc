@@ -1,3 +1,4 @@
+// Parses BVH text: the HIERARCHY (joints, offsets, channels) and the MOTION frames into a BvhClip.
 #include "server/core/motion/bvh_parser.h"
 
 #include <algorithm>
@@ -5,7 +6,6 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <initializer_list>
 #include <new>
 #include <system_error>
 #include <utility>
@@ -17,15 +17,20 @@
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
-#include "absl/strings/strip.h"
+#include "server/core/motion/bvh_tokenizer.h"
 
 namespace modskill {
 namespace {
 
+using bvh_internal::LineReader;
+using bvh_internal::MatchHeader;
+using bvh_internal::Quoted;
+using bvh_internal::SplitTokens;
+using bvh_internal::Token;
+using bvh_internal::TokenReader;
+
 constexpr double kDegreesToRadians = 3.14159265358979323846 / 180.0;
 constexpr int kMaxChannelsPerJoint = 6;
-// Keeps messages readable when a token is a megabyte of garbage.
-constexpr size_t kMaxQuotedTokenChars = 40;
 
 enum class ChannelKind { kXposition, kYposition, kZposition, kXrotation, kYrotation, kZrotation };
 
@@ -58,120 +63,6 @@ int AxisOf(ChannelKind kind) {
       return 2;
   }
   return 0;
-}
-
-std::string Quoted(absl::string_view token) {
-  if (token.size() <= kMaxQuotedTokenChars) return absl::StrCat("'", token, "'");
-  return absl::StrCat("'", token.substr(0, kMaxQuotedTokenChars), "...'");
-}
-
-bool IsBlank(absl::string_view line) { return absl::StripAsciiWhitespace(line).empty(); }
-
-// Splits on ASCII whitespace (spaces, tabs, stray carriage returns), reusing `tokens`.
-void SplitTokens(absl::string_view line, std::vector<absl::string_view>* tokens) {
-  tokens->clear();
-  size_t i = 0;
-  while (i < line.size()) {
-    while (i < line.size() && absl::ascii_isspace(static_cast<unsigned char>(line[i]))) ++i;
-    const size_t start = i;
-    while (i < line.size() && !absl::ascii_isspace(static_cast<unsigned char>(line[i]))) ++i;
-    if (i > start) tokens->push_back(line.substr(start, i - start));
-  }
-}
-
-// Physical lines of the text; "\n", "\r\n" and a lone "\r" all end a line.
-class LineReader {
- public:
-  explicit LineReader(absl::string_view text) : text_(text) {}
-
-  bool Next(absl::string_view* line) {
-    if (position_ >= text_.size()) return false;
-    const size_t end = text_.find_first_of("\r\n", position_);
-    if (end == absl::string_view::npos) {
-      *line = text_.substr(position_);
-      position_ = text_.size();
-    } else {
-      *line = text_.substr(position_, end - position_);
-      position_ = end + 1;
-      if (text_[end] == '\r' && position_ < text_.size() && text_[position_] == '\n') ++position_;
-    }
-    ++line_number_;
-    return true;
-  }
-
-  bool NextNonBlank(absl::string_view* line) {
-    while (Next(line)) {
-      if (!IsBlank(*line)) return true;
-    }
-    return false;
-  }
-
-  // 1-based number of the line last returned; 0 before the first.
-  int line_number() const { return line_number_; }
-
- private:
-  absl::string_view text_;
-  size_t position_ = 0;
-  int line_number_ = 0;
-};
-
-struct Token {
-  absl::string_view text;
-  int line = 0;
-};
-
-// Whitespace-separated tokens for the HIERARCHY part. Reads lines lazily so that, once MOTION
-// is consumed, the LineReader sits on the line after it for the line-based MOTION part.
-class TokenReader {
- public:
-  explicit TokenReader(LineReader* lines) : lines_(lines) {}
-
-  bool Peek(Token* token) {
-    while (index_ >= tokens_.size()) {
-      absl::string_view line;
-      if (!lines_->Next(&line)) return false;
-      SplitTokens(line, &tokens_);
-      index_ = 0;
-    }
-    *token = Token{tokens_[index_], lines_->line_number()};
-    return true;
-  }
-
-  bool Next(Token* token) {
-    if (!Peek(token)) return false;
-    ++index_;
-    return true;
-  }
-
-  // The tokens left on the line of the token last returned by Next, consumed.
-  std::vector<Token> RestOfLine() {
-    std::vector<Token> rest;
-    for (; index_ < tokens_.size(); ++index_) {
-      rest.push_back(Token{tokens_[index_], lines_->line_number()});
-    }
-    return rest;
-  }
-
-  int line_number() const { return lines_->line_number(); }
-
- private:
-  LineReader* lines_;
-  std::vector<absl::string_view> tokens_;
-  size_t index_ = 0;
-};
-
-// Matches "<words...> : <value>" with free whitespace, e.g. "Frame Time:\t.0083"; sets the
-// stripped value text.
-bool MatchHeader(absl::string_view line, std::initializer_list<absl::string_view> words,
-                 absl::string_view* value) {
-  absl::string_view rest = absl::StripAsciiWhitespace(line);
-  for (absl::string_view word : words) {
-    if (!absl::StartsWithIgnoreCase(rest, word)) return false;
-    rest = absl::StripLeadingAsciiWhitespace(rest.substr(word.size()));
-  }
-  if (!absl::ConsumePrefix(&rest, ":")) return false;
-  *value = absl::StripAsciiWhitespace(rest);
-  return true;
 }
 
 // Per-joint data the public struct does not carry.
