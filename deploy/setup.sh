@@ -16,6 +16,8 @@ PACKAGES=(
   clang libfuzzer-14-dev  # the fuzz targets deploy/test.sh runs (fuzz/run.sh, build-fuzz/)
   python3-grpcio python3-numpy python3-matplotlib
   python3-venv python3-pip python3-setuptools python3-wheel  # pip install ./client/python, offline
+  libjs-three  # three.js, inlined into the HTML viewer pages (common/viewer)
+  chromium     # tests/viewer: the viewer page in headless Chromium
 )
 
 missing=()

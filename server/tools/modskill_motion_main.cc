@@ -1,11 +1,14 @@
-// modskill-motion: imports motion files into the native clip format and inspects clips.
+// modskill-motion: imports motion files into the native clip format, inspects clips and writes
+// them as one self-contained HTML page.
 //
 //   modskill-motion import IN... --out DIR [--labels CSV] [--fps 30]
 //   modskill-motion inspect FILE...
+//   modskill-motion view CLIP... --html OUT.html   (CLIP: a motion file or a library clip name)
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -15,15 +18,19 @@
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_split.h"
 #include "absl/strings/strip.h"
+#include "common/viewer/viewer_html.h"
+#include "server/core/motion/clip_view.h"
 #include "server/core/motion/clip_file.h"
 #include "server/core/motion/motion_import.h"
+#include "server/core/motion/motion_library.h"
 #include "server/core/sim/humanoid_spec.h"
 #include "server/core/util/confined_path.h"
 
 ABSL_FLAG(std::string, out, "", "import: directory the .msclip files are written to");
 ABSL_FLAG(std::string, labels, "", "import: CSV 'name,humanml3d_id,label' giving clips their captions");
-ABSL_FLAG(double, fps, 30.0, "import: rate the clips are resampled to (the control rate)");
-ABSL_FLAG(bool, ground, true, "import: shift each clip so that its lowest point touches the floor");
+ABSL_FLAG(double, fps, 30.0, "import, view: rate the clips are resampled to (the control rate)");
+ABSL_FLAG(bool, ground, true, "import, view: shift each clip so that its lowest point touches the floor");
+ABSL_FLAG(std::string, html, "", "view: the HTML page written (written atomically: no partial file)");
 
 namespace modskill {
 namespace {
@@ -146,18 +153,81 @@ int Inspect(const std::vector<std::string>& files, const HumanoidSpec& spec) {
   return failures == 0 ? 0 : 1;
 }
 
+// A motion file when `input` names one, else the clip of that name in the default library
+// (loaded on first need into `library`).
+absl::StatusOr<MotionClip> ResolveClip(const std::string& input, const HumanoidSpec& spec,
+                                       std::optional<MotionLibrary>* library) {
+  std::error_code error;
+  if (std::filesystem::exists(input, error)) {
+    ImportOptions options;
+    options.target_fps = absl::GetFlag(FLAGS_fps);
+    options.place_on_ground = absl::GetFlag(FLAGS_ground);
+    return ImportMotionFile(input, spec, options);
+  }
+  if (!library->has_value()) {
+    absl::StatusOr<MotionLibrary> loaded = MotionLibrary::LoadDefault(spec);
+    if (!loaded.ok()) {
+      return absl::NotFoundError(absl::StrFormat("clip '%s': no such file, and the default library did not load: %s",
+                                                 input, loaded.status().message()));
+    }
+    library->emplace(*std::move(loaded));
+  }
+  const int id = (*library)->Find(input);
+  if (id < 0) {
+    return absl::NotFoundError(absl::StrFormat(
+        "clip '%s': no such file, and no clip of that name in the default library (%d clips; "
+        "modskill-motion inspect lists a file's name)",
+        input, (*library)->size()));
+  }
+  return (*library)->clip(id);
+}
+
+// Every clip must resolve before anything is written: a bad name leaves no page behind.
+int View(const std::vector<std::string>& inputs, const HumanoidSpec& spec) {
+  const std::string out = absl::GetFlag(FLAGS_html);
+  if (out.empty()) {
+    std::fprintf(stderr, "error: view needs --html OUT.html\n");
+    return 2;
+  }
+  ViewerScene scene;
+  scene.title = inputs.size() == 1 ? "modskill: " + inputs[0] : absl::StrFormat("modskill: %d clips", inputs.size());
+  scene.bodies = ViewerBodiesFromSpec(spec);
+  std::optional<MotionLibrary> library;
+  for (const std::string& input : inputs) {
+    absl::StatusOr<MotionClip> clip = ResolveClip(input, spec, &library);
+    absl::StatusOr<ViewerClip> view = clip.ok() ? ViewerClipFromMotion(*clip) : clip.status();
+    if (!view.ok()) {
+      std::fprintf(stderr, "error: %s (nothing written to %s)\n", std::string(view.status().message()).c_str(),
+                   out.c_str());
+      return 1;
+    }
+    scene.clips.push_back(*std::move(view));
+  }
+  if (auto status = WriteViewerHtml(out, scene); !status.ok()) {
+    std::fprintf(stderr, "error: --html %s\n", std::string(status.message()).c_str());
+    return 1;
+  }
+  std::error_code error;
+  const auto bytes = std::filesystem::file_size(out, error);
+  std::printf("%s: %zu clip(s), %.1f MB\n", out.c_str(), scene.clips.size(), error ? 0.0 : bytes / 1e6);
+  return 0;
+}
+
 }  // namespace
 }  // namespace modskill
 
 int main(int argc, char** argv) {
   absl::SetProgramUsageMessage(
-      "imports and inspects motion clips.\n"
+      "imports, inspects and views motion clips.\n"
       "  modskill-motion import IN... --out DIR [--labels CSV] [--fps 30]\n"
       "  modskill-motion inspect FILE...\n"
+      "  modskill-motion view CLIP... --html OUT.html  (CLIP: a motion file or a library clip name)\n"
       "Formats: AMASS/SMPL(-H) .npz, CMU .bvh, DeepMimic humanoid3d .txt, native .msclip");
   std::vector<char*> args = absl::ParseCommandLine(argc, argv);
   if (args.size() < 3) {
-    std::fprintf(stderr, "usage: modskill-motion import IN... --out DIR | modskill-motion inspect FILE...\n");
+    std::fprintf(stderr,
+                 "usage: modskill-motion import IN... --out DIR | modskill-motion inspect FILE... | "
+                 "modskill-motion view CLIP... --html OUT.html\n");
     return 2;
   }
   const std::string command = args[1];
@@ -169,6 +239,7 @@ int main(int argc, char** argv) {
   }
   if (command == "import") return modskill::Import(files, *spec);
   if (command == "inspect") return modskill::Inspect(files, *spec);
-  std::fprintf(stderr, "error: unknown command '%s' (expected import or inspect)\n", command.c_str());
+  if (command == "view") return modskill::View(files, *spec);
+  std::fprintf(stderr, "error: unknown command '%s' (expected import, inspect or view)\n", command.c_str());
   return 2;
 }
