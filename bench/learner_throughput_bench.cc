@@ -16,6 +16,7 @@
 #include "absl/flags/parse.h"
 #include "absl/strings/str_cat.h"
 #include "common/policy/policy_checkpoint.h"
+#include "common/wire/policy_enums.h"
 #include "learner/critic.h"
 #include "learner/modskill_policy.h"
 #include "learner/ppo_loss.h"
@@ -116,7 +117,7 @@ double ServerAlone(const std::string& address) {
   // actions track the reference open loop.
   v1::SessionConfig session;
   session.set_num_envs(128);
-  session.set_action_mode(TrainerConfig::ForPreset("small")->action_mode == "residual" ? v1::RESIDUAL : v1::ABSOLUTE);
+  session.set_action_mode(ToWire(ActionModeOf(*TrainerConfig::ForPreset("small"))));
   auto first = (*client)->OpenSession(session);
   auto second = (*client)->OpenSession(session);
   std::vector<float> zeros(128 * 69, 0.f);

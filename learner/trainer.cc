@@ -14,6 +14,7 @@
 #include "absl/time/clock.h"
 #include "common/atomic_file.h"
 #include "common/log.h"
+#include "common/wire/policy_enums.h"
 #include "learner/evaluation.h"
 #include "learner/trainer_phases.h"
 
@@ -72,13 +73,11 @@ absl::StatusOr<std::unique_ptr<Trainer>> Trainer::Create(const TrainerConfig& co
   pool.session.set_part_layout(config.part_layout);
   for (const std::string& clip : config.motions) pool.session.add_motions(clip);
   pool.session.set_termination(v1::TRAINING);
-  const bool residual = ActionModeOf(config) == ActionMode::kResidual;
-  pool.session.set_action_mode(residual ? v1::RESIDUAL : v1::ABSOLUTE);
-  if (residual) pool.session.set_residual_scale(static_cast<float>(config.residual_scale));
+  pool.session.set_action_mode(ToWire(ActionModeOf(config)));
+  if (ActionModeOf(config) == ActionMode::kResidual) pool.session.set_residual_scale(static_cast<float>(config.residual_scale));
   // The curriculum's starting distance; every action message then carries the current one.
   pool.session.set_termination_distance(static_cast<float>(trainer->curriculum_.distance()));
-  pool.session.set_termination_bodies(TerminationBodiesOf(config) == TerminationBodies::kNoFeet ? v1::NO_FEET
-                                                                                                : v1::ALL);
+  pool.session.set_termination_bodies(ToWire(TerminationBodiesOf(config)));
   pool.session.set_amp_obs(v1::FULL);
   trainer->servers_ = std::make_unique<ServerPool>(pool);
   if (absl::Status status = trainer->WaitForServers(); !status.ok()) return status;

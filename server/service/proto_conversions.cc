@@ -57,6 +57,27 @@ void ToProto(const ClipRolloutMetrics& metrics, v1::ClipMetrics* out) {
   out->set_max_mean_body_error_m(metrics.worst_mean_body_error);
 }
 
+void ToProto(const std::vector<std::string>& part_names, const VariantProvenance& provenance,
+             v1::ClipProvenance* out) {
+  out->set_parent(provenance.parent);
+  out->set_generator(provenance.generator);
+  if (provenance.part >= 0 && provenance.part < static_cast<int>(part_names.size())) {
+    out->set_part(part_names[provenance.part]);
+  }
+  out->set_seed(provenance.seed);
+}
+
+// The clips that joined and left since the stream last installed a motion set.
+void ToProto(const std::vector<std::string>& part_names, const PendingMotionSet& pending, v1::MotionSetUpdate* out) {
+  for (const SessionClipInfo& info : pending.added) {
+    v1::SessionClip* clip = out->add_added();
+    clip->set_clip_id(info.id);
+    clip->set_name(info.name);
+    if (info.provenance.has_value()) ToProto(part_names, *info.provenance, clip->mutable_provenance());
+  }
+  for (int id : pending.removed_ids) out->add_removed_clip_ids(id);
+}
+
 namespace {
 
 void EncodeRows(const std::vector<float>& rows, int64_t n, int64_t width, v1::Tensor* out) {

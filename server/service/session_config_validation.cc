@@ -2,6 +2,7 @@
 
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
+#include "common/wire/policy_enums.h"
 #include "server/core/env/env_batch.h"
 #include "server/core/env/env_spec.h"
 
@@ -35,17 +36,9 @@ absl::StatusOr<double> ToTerminationDistance(float distance, TerminationMode mod
 
 absl::StatusOr<ActionMapping> ToActionMapping(v1::ActionMode mode, float residual_scale) {
   ActionMapping mapping;
-  switch (mode) {
-    case v1::ACTION_MODE_UNSPECIFIED:
-    case v1::ABSOLUTE:
-      mapping.mode = ActionMode::kAbsolute;
-      break;
-    case v1::RESIDUAL:
-      mapping.mode = ActionMode::kResidual;
-      break;
-    default:
-      return absl::InvalidArgumentError(absl::StrCat("action_mode: unknown value ", static_cast<int>(mode)));
-  }
+  absl::StatusOr<ActionMode> parsed = ActionModeFromWire(mode);
+  if (!parsed.ok()) return parsed.status();
+  mapping.mode = *parsed;
   if (mapping.mode == ActionMode::kAbsolute) {
     if (residual_scale != 0) return absl::InvalidArgumentError("residual_scale: set, but action_mode is not RESIDUAL");
     return mapping;
@@ -53,18 +46,6 @@ absl::StatusOr<ActionMapping> ToActionMapping(v1::ActionMode mode, float residua
   if (residual_scale != 0) mapping.residual_scale = residual_scale;  // 0: the default
   if (absl::Status status = mapping.Validate(); !status.ok()) return status;
   return mapping;
-}
-
-absl::StatusOr<TerminationBodies> ToTerminationBodies(v1::TerminationBodies bodies) {
-  switch (bodies) {
-    case v1::TERMINATION_BODIES_UNSPECIFIED:
-    case v1::ALL:
-      return TerminationBodies::kAll;
-    case v1::NO_FEET:
-      return TerminationBodies::kNoFeet;
-    default:
-      return absl::InvalidArgumentError(absl::StrCat("termination_bodies: unknown value ", static_cast<int>(bodies)));
-  }
 }
 
 absl::StatusOr<SessionSettings> ParseSessionConfig(const v1::SessionConfig& config, int max_envs_per_session,
@@ -86,7 +67,7 @@ absl::StatusOr<SessionSettings> ParseSessionConfig(const v1::SessionConfig& conf
   if (!distance.ok()) return distance.status();
   auto action_mapping = ToActionMapping(config.action_mode(), config.residual_scale());
   if (!action_mapping.ok()) return action_mapping.status();
-  auto termination_bodies = ToTerminationBodies(config.termination_bodies());
+  auto termination_bodies = TerminationBodiesFromWire(config.termination_bodies());
   if (!termination_bodies.ok()) return termination_bodies.status();
   if (!v1::AmpObs_IsValid(config.amp_obs())) return absl::InvalidArgumentError("amp_obs: unknown value");
   settings.amp_frames = config.amp_obs() == v1::NEWEST ? 1 : config.amp_obs() == v1::OMIT ? 0 : kAmpHistory;

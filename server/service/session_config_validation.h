@@ -41,7 +41,6 @@ absl::StatusOr<TerminationMode> ToTermination(v1::TerminationMode mode, v1::Term
 absl::StatusOr<double> ToTerminationDistance(float distance, TerminationMode mode);
 // residual_scale must be 0 outside RESIDUAL; 0 in RESIDUAL means the default scale.
 absl::StatusOr<ActionMapping> ToActionMapping(v1::ActionMode mode, float residual_scale);
-absl::StatusOr<TerminationBodies> ToTerminationBodies(v1::TerminationBodies bodies);
 
 }  // namespace modskill
 

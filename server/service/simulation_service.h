@@ -6,11 +6,13 @@
 #include <memory>
 #include <string>
 
+#include "common/policy/policy_checkpoint.h"
 #include "modskill/v1/modskill.grpc.pb.h"
 #include "server/core/curriculum/adaptive_sampler.h"
 #include "server/core/curriculum/plausibility_filter.h"
 #include "server/core/curriculum/session_motion_set.h"
 #include "server/core/env/env_batch.h"
+#include "server/core/env/rollout.h"
 #include "server/service/generation_worker.h"
 #include "server/service/motion_store.h"
 #include "server/service/session_registry.h"
@@ -81,6 +83,21 @@ class SimulationService final : public v1::Simulation::Service {
 
   grpc::Status CheckAuth(const grpc::ServerContext* context) const;
   absl::StatusOr<PartLayout> Layout(const std::string& name) const;
+
+  // Simulate's phases (simulate_rpc.cc): open the session the config asks for (registered, its
+  // envs reset), describe it, then apply one actions message and fill the step's result.
+  struct StepScratch;
+  absl::StatusOr<std::shared_ptr<SimulationSession>> OpenSession(const grpc::ServerContext& context,
+                                                                 const v1::SessionConfig& config, int* amp_frames);
+  void DescribeOpenedSession(const SimulationSession& session, int amp_frames, v1::SessionOpened* opened) const;
+  absl::Status StepSession(SimulationSession& session, const v1::SimulateRequest& request, int amp_frames,
+                           StepScratch& scratch, v1::StepResult* out);
+
+  // Rollout's phases (rollout_rpc.cc): the policy from a path in --checkpoint_dir or bytes, the
+  // clips and options the request asks for.
+  absl::StatusOr<std::unique_ptr<PolicyCheckpoint>> LoadRolloutPolicy(const v1::RolloutRequest& request) const;
+  absl::StatusOr<RolloutOptions> RolloutOptionsFor(const v1::RolloutRequest& request,
+                                                   const ActionMapping& trained) const;
 
   const ServiceOptions options_;
   MotionStore motions_;

@@ -1,0 +1,170 @@
+// The Rollout RPC in phases: load the policy (a path inside --checkpoint_dir, or bytes), check it
+// fits this server's env and the request's action mode, resolve the clips and options, run the
+// clips, stream frames when asked and one metrics message per clip.
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "absl/strings/str_cat.h"
+#include "common/grpc_status.h"
+#include "common/log.h"
+#include "common/shown_value.h"
+#include "common/wire/policy_enums.h"
+#include "common/wire/tensor_codec.h"
+#include "server/core/env/policy_fit.h"
+#include "server/core/util/confined_path.h"
+#include "server/service/proto_conversions.h"
+#include "server/service/session_config_validation.h"
+#include "server/service/simulation_service.h"
+
+namespace modskill {
+namespace {
+
+// The request's action mode (unspecified: the trained one) must be the one the policy was
+// trained in.
+absl::Status CheckActionMode(const v1::RolloutRequest& request, const ActionMapping& trained) {
+  if (!v1::ActionMode_IsValid(request.action_mode())) {
+    return absl::InvalidArgumentError(absl::StrCat("action_mode: unknown value ", static_cast<int>(request.action_mode())));
+  }
+  if (request.action_mode() != v1::ACTION_MODE_UNSPECIFIED && request.action_mode() != ToWire(trained.mode)) {
+    return absl::FailedPreconditionError(absl::StrCat("action_mode: the checkpoint was trained in ",
+                                                      ActionModeName(trained.mode), " mode; it cannot run in ",
+                                                      v1::ActionMode_Name(request.action_mode())));
+  }
+  return absl::OkStatus();
+}
+
+// The library ids of the requested clips; none requested: every clip.
+absl::StatusOr<std::vector<int>> RolloutClipIds(const v1::RolloutRequest& request, const MotionLibrary& motions) {
+  std::vector<int> clip_ids;
+  for (int c = 0; c < request.clips_size(); ++c) {
+    const int id = motions.Find(request.clips(c));
+    if (id < 0) {
+      return absl::NotFoundError(absl::StrCat("clips[", c, "]: unknown clip '", ShownValue(request.clips(c)), "'"));
+    }
+    clip_ids.push_back(id);
+  }
+  if (clip_ids.empty()) {
+    for (int c = 0; c < motions.size(); ++c) clip_ids.push_back(c);
+  }
+  return clip_ids;
+}
+
+// Writes one RolloutFrame per simulated frame until the client goes away.
+class FrameStreamer {
+ public:
+  FrameStreamer(grpc::ServerWriter<v1::RolloutResponse>* writer, const MotionLibrary& motions,
+                const std::vector<int>& clip_ids)
+      : writer_(writer), motions_(motions), clip_ids_(clip_ids) {}
+
+  bool client_gone() const { return client_gone_; }
+
+  void Write(int clip_index, int frame, const std::vector<Vec3>& sim, const std::vector<Vec3>& ref) {
+    if (client_gone_) return;
+    v1::RolloutFrame* out = message_.mutable_frame();
+    out->set_clip(motions_.clip(clip_ids_[clip_index]).name);
+    out->set_frame(frame);
+    sim_flat_.clear();
+    ref_flat_.clear();
+    for (size_t b = 0; b < sim.size(); ++b) {
+      for (int k = 0; k < 3; ++k) {
+        sim_flat_.push_back(static_cast<float>(sim[b][k]));
+        ref_flat_.push_back(static_cast<float>(ref[b][k]));
+      }
+    }
+    const int64_t bodies = static_cast<int64_t>(sim.size());
+    SetFloatTensor({bodies, 3}, sim_flat_.data(), out->mutable_sim_body_pos());
+    SetFloatTensor({bodies, 3}, ref_flat_.data(), out->mutable_ref_body_pos());
+    client_gone_ = !writer_->Write(message_);
+  }
+
+ private:
+  grpc::ServerWriter<v1::RolloutResponse>* writer_;
+  const MotionLibrary& motions_;
+  const std::vector<int>& clip_ids_;
+  v1::RolloutResponse message_;
+  std::vector<float> sim_flat_, ref_flat_;
+  bool client_gone_ = false;
+};
+
+}  // namespace
+
+grpc::Status SimulationService::Rollout(grpc::ServerContext* context, const v1::RolloutRequest* request,
+                                        grpc::ServerWriter<v1::RolloutResponse>* writer) {
+  if (auto auth = CheckAuth(context); !auth.ok()) return auth;
+  absl::StatusOr<std::unique_ptr<PolicyCheckpoint>> policy = LoadRolloutPolicy(*request);
+  if (!policy.ok()) return ToGrpcStatus(policy.status());
+  const PolicySpec& trained = (*policy)->spec();
+  auto layout = Layout(trained.part_layout);
+  if (!layout.ok()) {
+    return ToGrpcStatus(absl::FailedPreconditionError(absl::StrCat(
+        "checkpoint: trained with layout '", ShownValue(trained.part_layout), "' that this server does not offer")));
+  }
+  if (absl::Status status = CheckPolicyFitsEnv(trained, MakeEnvSpec(*humanoid_, *layout)); !status.ok()) {
+    return ToGrpcStatus(status);
+  }
+  if (absl::Status status = CheckActionMode(*request, trained.action); !status.ok()) return ToGrpcStatus(status);
+  absl::StatusOr<RolloutOptions> options = RolloutOptionsFor(*request, trained.action);
+  if (!options.ok()) return ToGrpcStatus(options.status());
+  std::shared_ptr<const MotionLibrary> motions = motions_.Snapshot();
+  absl::StatusOr<std::vector<int>> clip_ids = RolloutClipIds(*request, *motions);
+  if (!clip_ids.ok()) return ToGrpcStatus(clip_ids.status());
+
+  FrameStreamer frames(writer, *motions, *clip_ids);
+  RolloutFrameCallback on_frame = nullptr;
+  if (request->stream_frames()) {
+    on_frame = [&frames](int clip, int frame, const std::vector<Vec3>& sim, const std::vector<Vec3>& ref) {
+      frames.Write(clip, frame, sim, ref);
+    };
+  }
+  PolicyCheckpoint* checkpoint = policy->get();
+  auto metrics = RunRollout(
+      humanoid_, *layout, motions, *clip_ids,
+      [&](const float* obs, int n, float* actions) -> absl::Status {
+        if (context->IsCancelled() || frames.client_gone()) return absl::CancelledError("rollout: the client went away");
+        return checkpoint->Act(obs, n, actions);
+      },
+      *options, on_frame);
+  if (!metrics.ok()) return ToGrpcStatus(metrics.status());
+  int successes = 0;
+  for (const ClipRolloutMetrics& clip : *metrics) {
+    v1::RolloutResponse message;
+    ToProto(clip, message.mutable_metrics());
+    successes += clip.success;
+    if (!writer->Write(message)) break;
+  }
+  LogLine("rollout by %s: %d clips, %d succeeded", context->peer(), static_cast<int>(metrics->size()), successes);
+  return grpc::Status::OK;
+}
+
+absl::StatusOr<std::unique_ptr<PolicyCheckpoint>> SimulationService::LoadRolloutPolicy(
+    const v1::RolloutRequest& request) const {
+  if (request.has_checkpoint_path()) {
+    // Only files in the operator's --checkpoint_dir directories, and no larger than an upload.
+    auto bytes = ReadConfinedFile(options_.checkpoint_dirs, request.checkpoint_path(), options_.max_upload_bytes,
+                                  "checkpoint_path");
+    if (!bytes.ok()) return bytes.status();
+    return PolicyCheckpoint::LoadBytes(*bytes);
+  }
+  if (request.has_checkpoint_bytes()) return PolicyCheckpoint::LoadBytes(request.checkpoint_bytes());
+  return absl::InvalidArgumentError("checkpoint: set checkpoint_path or checkpoint_bytes");
+}
+
+absl::StatusOr<RolloutOptions> SimulationService::RolloutOptionsFor(const v1::RolloutRequest& request,
+                                                                    const ActionMapping& trained) const {
+  if (request.max_steps_per_clip() < 0) return absl::InvalidArgumentError("max_steps_per_clip: < 0");
+  auto termination = ToTermination(request.termination(), v1::EVALUATION);
+  if (!termination.ok()) return termination.status();
+  auto distance = ToTerminationDistance(request.termination_distance(), *termination);
+  if (!distance.ok()) return distance.status();
+  RolloutOptions options;
+  options.termination = *termination;
+  options.termination_distance = *distance;
+  options.action = trained;
+  options.max_steps_per_clip = request.max_steps_per_clip();
+  options.num_threads = options_.threads_per_session;
+  options.physics = options_.physics;
+  return options;
+}
+
+}  // namespace modskill
