@@ -17,6 +17,7 @@
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
 #include "absl/strings/str_cat.h"
+#include "bench/median.h"
 #include "client/cpp/simulation_client.h"
 #include "common/wire/tensor_codec.h"
 #include "server/service/server_runner.h"
@@ -29,11 +30,6 @@ namespace modskill {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double Median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0 : v[v.size() / 2];
-}
 
 struct Measurement {
   double env_steps_per_second = 0;

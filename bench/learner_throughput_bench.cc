@@ -15,6 +15,7 @@
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
 #include "absl/strings/str_cat.h"
+#include "bench/median.h"
 #include "common/policy/policy_checkpoint.h"
 #include "common/wire/policy_enums.h"
 #include "learner/critic.h"
@@ -42,11 +43,6 @@ namespace modskill::learner {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double Median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
 
 template <typename F>
 double SamplesPerSecond(int samples, int repeats, F&& work) {

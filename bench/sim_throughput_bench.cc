@@ -14,6 +14,7 @@
 
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
+#include "bench/median.h"
 #include "server/core/env/env_batch.h"
 #include "server/core/env/humanoid_state.h"
 #include "server/core/env/reference_actions.h"
@@ -28,11 +29,6 @@ namespace modskill {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double Median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0 : v[v.size() / 2];
-}
 
 // mj_step calls per second, timing nothing but mj_step.
 double RawStepRate(const HumanoidModel& humanoid, const MotionLibrary& motions, double seconds, uint64_t seed) {

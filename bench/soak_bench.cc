@@ -28,6 +28,7 @@
 #include "absl/flags/parse.h"
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
+#include "bench/median.h"
 #include "bench/soak_client.h"
 #include "common/policy/policy_checkpoint.h"
 #include "modskill/v1/modskill.grpc.pb.h"
@@ -80,13 +81,6 @@ int OpenFds(int pid) {
   while (dirent* entry = readdir(directory)) count += entry->d_name[0] != '.';
   closedir(directory);
   return count - (pid > 0 ? 0 : 1);  // not the directory's own fd
-}
-
-template <typename T>
-T Median(std::vector<T> values) {
-  if (values.empty()) return T();
-  std::sort(values.begin(), values.end());
-  return values[values.size() / 2];
 }
 
 // Medians of one quarter of the samples (0-based).
