@@ -4,8 +4,9 @@
 #   tests/python/run_python_tests.sh BUILD_DIR
 #
 # BUILD_DIR must hold server/modskill-server and tests/make_test_policy (the targets
-# modskill-server and make_test_policy). The package is imported from the source tree,
-# client/python (its generated stubs are committed; test_install.py checks they match the proto).
+# modskill-server and make_test_policy); test_viewer.py also runs client/modskill-client when it
+# is there (MODSKILL_BUILD_DIR) and skips that one check otherwise. The package is imported from
+# the source tree, client/python (its generated stubs are committed; test_install.py checks they match the proto).
 # Exits 77 (skipped) when Debian's /usr/bin/python3 lacks grpc or numpy; otherwise with the
 # unittest status.
 set -u
@@ -89,7 +90,7 @@ fi
 
 cd "$REPO_DIR"
 PYTHONPATH="$PACKAGE_DIR" MODSKILL_SERVER="$ADDRESS" MODSKILL_TEST_CHECKPOINT="$CHECKPOINT" \
-  MODSKILL_SERVER_BINARY="$SERVER" MODSKILL_TEST_WORK_DIR="$WORK_DIR" MPLBACKEND=Agg PYTHONDONTWRITEBYTECODE=1 \
+  MODSKILL_SERVER_BINARY="$SERVER" MODSKILL_BUILD_DIR="$BUILD_DIR" MODSKILL_TEST_WORK_DIR="$WORK_DIR" MPLBACKEND=Agg PYTHONDONTWRITEBYTECODE=1 \
   "$PYTHON" -m unittest discover -s tests/python -p 'test_*.py' -v
 status=$?
 if [ "$status" != 0 ]; then

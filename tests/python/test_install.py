@@ -20,9 +20,11 @@ REPO_DIR = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 PACKAGE_DIR = os.path.join(REPO_DIR, "client", "python")
 STUBS = ("modskill_pb2.py", "modskill_pb2_grpc.py")
 PYTHON = "/usr/bin/python3"
-# Imports every module and prints where the package came from.
-IMPORT_CHECK = ("import modskill, modskill.v1.modskill_pb2_grpc, modskill.vector_env; "
-                "print(modskill.__file__); print(modskill.VectorEnv.__name__)")
+# Imports every module, prints where the package came from and checks that the viewer's page
+# template (package data) was installed with it.
+IMPORT_CHECK = ("import modskill, modskill.v1.modskill_pb2_grpc, modskill.vector_env, modskill.viewer; "
+                "print(modskill.__file__); print(modskill.VectorEnv.__name__); "
+                "print('template', b'MODSKILL_SCENE_JSON' in modskill.viewer.page_template())")
 
 
 def missing_modules(*modules):
@@ -89,6 +91,7 @@ class InstallTest(unittest.TestCase):
         self.assertTrue(output.startswith(prefix), f"modskill came from {output.splitlines()[0]}, not {prefix}")
         self.assertNotIn(REPO_DIR + os.sep, output)
         self.assertIn("VectorEnv", output)
+        self.assertIn("template True", output)
 
     def test_venv(self):
         venv = os.path.join(self.work, "venv")

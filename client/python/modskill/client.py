@@ -66,6 +66,39 @@ def read_token_file(path: PathLike) -> str:
     return token
 
 
+def _stack_poses(clip: str, rows: Sequence[pb.RolloutFrame], name: str, width: int,
+                 num_bodies: int) -> Optional[np.ndarray]:
+    """``RolloutFrame.<name>`` of every row as float32 [T, num_bodies, width]; None when a row
+    lacks it (rotations from a server older than the viewer)."""
+    poses = []
+    for t, row in enumerate(rows):
+        pose = tensors.decode_field(row, name)
+        if pose is None:
+            return None
+        if pose.dtype != np.float32 or pose.shape != (num_bodies, width):
+            raise ValueError(f"rollout of clip {clip!r}: frame row {t}: {name} is {pose.dtype} "
+                             f"{list(pose.shape)}, expected float32 [{num_bodies}, {width}]")
+        poses.append(pose)
+    return np.stack(poses) if poses else np.zeros((0, num_bodies, width), np.float32)
+
+
+def _set_frames(result: ClipRollout, rows: Sequence[pb.RolloutFrame]) -> None:
+    """Fills the per-row fields of ``result`` from its clip's streamed frames."""
+    shape = rows[0].sim_body_pos.shape if rows else []
+    num_bodies = int(shape[0]) if shape else len(result.body_error_mm)
+    result.frames = np.array([row.frame for row in rows], dtype=np.int32)
+    for name in ("sim_body_pos", "ref_body_pos"):
+        positions = _stack_poses(result.clip, rows, name, 3, num_bodies)
+        if positions is None:
+            raise ValueError(f"rollout of clip {result.clip!r}: a frame has no {name}")
+        setattr(result, name, positions)
+    result.sim_body_rot = _stack_poses(result.clip, rows, "sim_body_rot", 4, num_bodies)
+    result.ref_body_rot = _stack_poses(result.clip, rows, "ref_body_rot", 4, num_bodies)
+    result.body_error_m = np.array([row.mean_body_error_m for row in rows], dtype=np.float32)
+    result.done = np.array([row.done for row in rows], dtype=np.bool_)
+    result.terminated = np.array([row.terminated for row in rows], dtype=np.bool_)
+
+
 class Client:
     """A connection to a modskill simulation server.
 
@@ -220,8 +253,11 @@ class Client:
 
         Args:
           clips: clip names; empty: every clip of the library.
-          frames: also return per-step simulated and reference body positions
-            (``ClipRollout.sim_body_pos`` / ``ref_body_pos``, float32 [T, num_bodies, 3]).
+          frames: also return per-step simulated and reference body poses
+            (``ClipRollout.sim_body_pos`` / ``ref_body_pos``, float32 [T, num_bodies, 3];
+            ``sim_body_rot`` / ``ref_body_rot``, float32 [T, num_bodies, 4] w x y z), the mean
+            body error and the done / terminated flags of each row; ``modskill.viewer.write_html``
+            turns them into a page.
           termination: "evaluation" (default: mean body error above 0.5 m), "training" or "none".
           termination_distance: metres; 0: the mode's default.
           max_steps_per_clip: 0: the clip's length.
@@ -248,30 +284,19 @@ class Client:
         else:
             request.checkpoint_path = server_checkpoint
         results: List[ClipRollout] = []
-        frame_rows: Dict[str, List[tuple]] = {}
+        frame_rows: Dict[str, List[pb.RolloutFrame]] = {}
         try:
             for response in self._stub.Rollout(request, metadata=self._metadata, timeout=timeout):
                 kind = response.WhichOneof("kind")
                 if kind == "frame":
-                    f = response.frame
-                    frame_rows.setdefault(f.clip, []).append(
-                        (f.frame, tensors.decode(f.sim_body_pos, "sim_body_pos"),
-                         tensors.decode(f.ref_body_pos, "ref_body_pos")))
+                    frame_rows.setdefault(response.frame.clip, []).append(response.frame)
                 elif kind == "metrics":
                     results.append(ClipRollout.from_proto(response.metrics))
         except grpc.RpcError as e:
             raise ServerError.from_rpc_error(e, self.server, "Rollout") from None
         if frames:
             for result in results:
-                rows = frame_rows.get(result.clip, [])
-                if rows:
-                    result.frames = np.array([r[0] for r in rows], dtype=np.int32)
-                    result.sim_body_pos = np.stack([r[1] for r in rows])
-                    result.ref_body_pos = np.stack([r[2] for r in rows])
-                else:
-                    result.frames = np.zeros((0,), np.int32)
-                    result.sim_body_pos = np.zeros((0, len(result.body_error_mm), 3), np.float32)
-                    result.ref_body_pos = np.zeros((0, len(result.body_error_mm), 3), np.float32)
+                _set_frames(result, frame_rows.get(result.clip, []))
         return results
 
     def session(self, num_envs: int, seed: int = 0, part_layout: str = "", motions: Sequence[str] = (),

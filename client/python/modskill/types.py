@@ -15,7 +15,7 @@ import numpy as np
 from . import tensors
 from .v1 import modskill_pb2 as pb
 
-__all__ = ["BodyPart", "EnvSpec", "StepResult", "ClipRollout", "message_to_dict"]
+__all__ = ["BodyPart", "BodyGeometry", "EnvSpec", "StepResult", "ClipRollout", "message_to_dict"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -40,6 +40,32 @@ class BodyPart:
         return self.action.stop - self.action.start
 
 
+_SHAPES = {pb.BodyGeometry.SPHERE: "sphere", pb.BodyGeometry.CAPSULE: "capsule", pb.BodyGeometry.BOX: "box"}
+
+
+@dataclasses.dataclass(frozen=True)
+class BodyGeometry:
+    """A body's collision geometry in its own frame (one geom per body), for viewers.
+
+    Lengths are metres. A 3-vector the shape does not use may be empty (read as zero).
+    """
+
+    parent: int  # index into EnvSpec.body_names; -1 for the root
+    shape: str  # "sphere", "capsule" or "box" ("unspecified" for a shape this client does not know)
+    radius: float  # sphere and capsule
+    half_extents: Tuple[float, ...]  # box: x, y, z, axis-aligned in the body frame
+    segment_from: Tuple[float, ...]  # capsule: the segment's ends
+    segment_to: Tuple[float, ...]
+    center: Tuple[float, ...]  # sphere and box
+
+    @classmethod
+    def from_proto(cls, geometry: pb.BodyGeometry) -> "BodyGeometry":
+        return cls(parent=geometry.parent, shape=_SHAPES.get(geometry.shape, "unspecified"),
+                   radius=geometry.radius, half_extents=tuple(geometry.half_extents),
+                   segment_from=tuple(geometry.segment_from), segment_to=tuple(geometry.segment_to),
+                   center=tuple(geometry.center))
+
+
 @dataclasses.dataclass(frozen=True)
 class EnvSpec:
     """The observation and action layout of a part layout (``Describe`` / ``Session.spec``)."""
@@ -62,6 +88,9 @@ class EnvSpec:
     termination_bodies: Tuple[str, ...]  # "all", "no_feet" (Describe only)
     action_offset: np.ndarray = dataclasses.field(repr=False, compare=False)  # PD target = offset + scale * a
     action_scale: np.ndarray = dataclasses.field(repr=False, compare=False)
+    # One per body (body_names order), for viewers (modskill.viewer); empty from a server older
+    # than the viewer.
+    body_geometry: Tuple[BodyGeometry, ...] = dataclasses.field(repr=False, compare=False)
 
     @classmethod
     def from_proto(cls, spec: pb.EnvSpec) -> "EnvSpec":
@@ -92,6 +121,7 @@ class EnvSpec:
             termination_bodies=tuple(spec.termination_bodies),
             action_offset=np.array(spec.action_offset, dtype=np.float32),
             action_scale=np.array(spec.action_scale, dtype=np.float32),
+            body_geometry=tuple(BodyGeometry.from_proto(g) for g in spec.body_geometry),
         )
 
     @property
@@ -191,10 +221,15 @@ class StepResult:
 class ClipRollout:
     """The result of a policy on one clip (``Client.rollout``).
 
-    Errors are in millimetres. With ``frames=True`` the body positions of every step are kept:
+    Errors are in millimetres. With ``frames=True`` the body poses of every step are kept:
     ``sim_body_pos`` and ``ref_body_pos`` are float32 ``[T, num_bodies, 3]`` in metres (world
-    frame, bodies in ``EnvSpec.body_names`` order) and ``frames`` the reference frame of each row.
-    T counts the start state too, so it is normally ``steps + 1``.
+    frame, z up, bodies in ``EnvSpec.body_names`` order), ``sim_body_rot`` and ``ref_body_rot``
+    float32 ``[T, num_bodies, 4]`` world orientations as w, x, y, z (MuJoCo's order),
+    ``body_error_m`` float32 ``[T]`` the mean distance between simulated and reference bodies,
+    ``frames`` the reference frame of each row, and ``done`` / ``terminated`` bool ``[T]``: the
+    clip's last row, and whether it ended there by termination rather than at the clip's end.
+    T counts the start state too, so it is normally ``steps + 1``. ``modskill.viewer.write_html``
+    draws them as a page. Without ``frames=True`` these are None.
     """
 
     clip: str
@@ -209,6 +244,11 @@ class ClipRollout:
     frames: Optional[np.ndarray] = None  # int32 [T]
     sim_body_pos: Optional[np.ndarray] = None  # float32 [T, num_bodies, 3]
     ref_body_pos: Optional[np.ndarray] = None  # float32 [T, num_bodies, 3]
+    sim_body_rot: Optional[np.ndarray] = None  # float32 [T, num_bodies, 4], w x y z
+    ref_body_rot: Optional[np.ndarray] = None  # float32 [T, num_bodies, 4]
+    body_error_m: Optional[np.ndarray] = None  # float32 [T], mean body error per row
+    done: Optional[np.ndarray] = None  # bool [T], the clip's last row
+    terminated: Optional[np.ndarray] = None  # bool [T], ... ended by termination
 
     @classmethod
     def from_proto(cls, metrics: pb.ClipMetrics) -> "ClipRollout":
