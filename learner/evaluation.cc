@@ -11,7 +11,8 @@
 namespace modskill::learner {
 
 absl::StatusOr<EvaluationReport> Evaluate(SimulationClient& client, const std::string& checkpoint_name,
-                                          const std::string& checkpoint_bytes, const std::vector<std::string>& clips) {
+                                          const std::string& checkpoint_bytes, const std::vector<std::string>& clips,
+                                          const std::function<void(const v1::RolloutFrame&)>& on_frame) {
   auto spec = client.Describe();
   if (!spec.ok()) return spec.status();
   v1::RolloutRequest request;
@@ -19,7 +20,8 @@ absl::StatusOr<EvaluationReport> Evaluate(SimulationClient& client, const std::s
   for (const std::string& clip : clips) request.add_clips(clip);
   request.set_termination(v1::EVALUATION);
   request.set_termination_distance(0.5f);
-  auto metrics = client.Rollout(request);
+  request.set_stream_frames(on_frame != nullptr);
+  auto metrics = client.Rollout(request, on_frame);
   if (!metrics.ok()) return metrics.status();
   if (metrics->empty()) return absl::InternalError("rollout: no clip metrics returned");
   EvaluationReport report;

@@ -3,6 +3,7 @@
 #ifndef MODSKILL_LEARNER_EVALUATION_H_
 #define MODSKILL_LEARNER_EVALUATION_H_
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -33,8 +34,10 @@ struct EvaluationReport {
 };
 
 // Runs the TorchScript policy in `checkpoint_bytes` on `clips` (empty: all) on `client`'s server.
+// With `on_frame` the server streams every simulated frame to it (for the viewer page).
 absl::StatusOr<EvaluationReport> Evaluate(SimulationClient& client, const std::string& checkpoint_name,
-                                          const std::string& checkpoint_bytes, const std::vector<std::string>& clips);
+                                          const std::string& checkpoint_bytes, const std::vector<std::string>& clips,
+                                          const std::function<void(const v1::RolloutFrame&)>& on_frame = nullptr);
 
 // The metadata of a policy for a server's env `spec`, run with `action` (what policy.pt carries).
 PolicySpec PolicySpecOf(const v1::EnvSpec& spec, const ActionMapping& action);

@@ -41,6 +41,9 @@ ABSL_FLAG(std::string, out, "", "rollout: write metrics, per-body errors (and fr
 ABSL_FLAG(bool, upload, true,
           "rollout: send the checkpoint file's bytes; false: send its path, which the server reads only from its "
           "--checkpoint_dir directories");
+ABSL_FLAG(std::string, html, "",
+          "rollout: write a self-contained viewer page (the policy's character beside its reference, every clip) "
+          "to this file");
 ABSL_FLAG(bool, frames, false, "rollout: stream per-frame simulated and reference body positions into --out");
 ABSL_FLAG(int, envs, 16, "simulate: envs in the session");
 ABSL_FLAG(int, steps, 100, "simulate: steps to take");
@@ -57,7 +60,7 @@ commands:
   motions                          the server's motion library, one line per clip
   stats                            server totals, live sessions and their 5 most sampled clips
   add-motions FILE...              upload clips (.npz .bvh .txt .msclip) to the server's library
-  rollout --checkpoint F [--clip NAME...] [--out F.json] [--upload] [--frames]
+  rollout --checkpoint F [--clip NAME...] [--out F.json] [--upload] [--frames] [--html F.html]
                                    evaluate a TorchScript policy on clips (default: every clip)
   simulate [--envs N] [--steps K] [--actions zero|random] [--seed S] [--part_layout L] [--clip NAME...]
                                    step a session and report env steps/s, reward, message sizes
@@ -158,6 +161,7 @@ int RunCommand(SimulationClient& client, const std::string& command, const std::
     options.clips = clips;
     options.out = absl::GetFlag(FLAGS_out);
     options.frames = absl::GetFlag(FLAGS_frames);
+    options.html = absl::GetFlag(FLAGS_html);
     return cli::Rollout(client, options);
   }
   cli::SimulateOptions options;

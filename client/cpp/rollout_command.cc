@@ -1,5 +1,4 @@
 #include "client/cpp/rollout_command.h"
-#include "common/wire/tensor_codec.h"
 
 #include <algorithm>
 #include <charconv>
@@ -10,6 +9,7 @@
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <optional>
 #include <utility>
 
 #include <nlohmann/json.hpp>
@@ -20,6 +20,9 @@
 #include "absl/strings/str_format.h"
 #include "client/cpp/cli_output.h"
 #include "common/atomic_file.h"
+#include "common/viewer/viewer_html.h"
+#include "common/viewer/viewer_wire.h"
+#include "common/wire/tensor_codec.h"
 
 namespace modskill::cli {
 namespace {
@@ -66,12 +69,12 @@ struct Means {
 };
 
 // A missing --out directory is found before the rollout, not after.
-absl::Status CheckOutDirectory(const std::string& out) {
+absl::Status CheckOutDirectory(const std::string& out, const char* flag) {
   if (out.empty()) return absl::OkStatus();
   std::error_code error;
   const std::filesystem::path parent = std::filesystem::absolute(out, error).parent_path();
   if (error || !std::filesystem::is_directory(parent, error)) {
-    return absl::NotFoundError(absl::StrCat("--out: ", out, ": the directory ", parent.string(), " does not exist"));
+    return absl::NotFoundError(absl::StrCat(flag, ": ", out, ": the directory ", parent.string(), " does not exist"));
   }
   return absl::OkStatus();
 }
@@ -92,7 +95,7 @@ absl::StatusOr<v1::RolloutRequest> MakeRequest(const RolloutOptions& options, st
     request.set_checkpoint_path(*checkpoint_shown);
   }
   for (const std::string& clip : options.clips) request.add_clips(clip);
-  request.set_stream_frames(options.frames);
+  request.set_stream_frames(options.frames || !options.html.empty());
   return request;
 }
 
@@ -250,11 +253,31 @@ int WriteJson(const RolloutOptions& options, const RolloutResult& result, const 
   return 0;
 }
 
+// The page's recorder, ready before the rollout runs.
+absl::StatusOr<RolloutViewerRecorder> PageRecorder(SimulationClient& client, const v1::EnvSpec& spec) {
+  auto motions = client.ListMotions();
+  if (!motions.ok()) return motions.status();
+  return PrepareRolloutPage(spec, *motions);
+}
+
+int WritePage(RolloutViewerRecorder& page, std::string title, const std::string& path) {
+  absl::StatusOr<ViewerScene> scene = page.TakeScene(std::move(title));
+  if (!scene.ok()) return Fail(absl::StrCat("--html: ", scene.status().message()));
+  if (absl::Status status = WriteViewerHtml(path, *scene); !status.ok()) {
+    return Fail(absl::StrCat("--html: ", status.message()));
+  }
+  std::printf("wrote %s: %zu clips, %lld frames\n", path.c_str(), scene->clips.size(),
+              static_cast<long long>(page.num_frames()));
+  return 0;
+}
+
 }  // namespace
 
 int Rollout(SimulationClient& client, const RolloutOptions& options) {
   const std::vector<std::string>& clips = options.clips;
-  if (absl::Status status = CheckOutDirectory(options.out); !status.ok()) return Fail(status);
+  for (auto [path, flag] : {std::pair{&options.out, "--out"}, std::pair{&options.html, "--html"}}) {
+    if (absl::Status status = CheckOutDirectory(*path, flag); !status.ok()) return Fail(status);
+  }
   std::string checkpoint_shown;
   auto request = MakeRequest(options, &checkpoint_shown);
   if (!request.ok()) return Fail(request.status());
@@ -278,13 +301,27 @@ int Rollout(SimulationClient& client, const RolloutOptions& options) {
   std::fflush(stdout);
 
   FrameCollector frames;
+  std::optional<RolloutViewerRecorder> page;
+  if (!options.html.empty()) {
+    absl::StatusOr<RolloutViewerRecorder> recorder = PageRecorder(client, *spec);
+    if (!recorder.ok()) return Fail(absl::StrCat("--html: ", recorder.status().message()));
+    page.emplace(*std::move(recorder));
+  }
   std::function<void(const v1::RolloutFrame&)> on_frame = nullptr;
-  if (options.frames) on_frame = [&frames](const v1::RolloutFrame& frame) { frames.Add(frame); };
+  if (options.frames || page) {
+    on_frame = [&](const v1::RolloutFrame& frame) {
+      if (options.frames) frames.Add(frame);
+      if (page) page->Add(frame);
+    };
+  }
   const auto start = std::chrono::steady_clock::now();
   auto metrics = client.Rollout(*request, on_frame);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (!metrics.ok()) return Fail(metrics.status());
   if (!frames.error().ok()) return Fail(frames.error());
+  if (page) {
+    if (int code = WritePage(*page, absl::StrCat("rollout of ", checkpoint_shown), options.html); code != 0) return code;
+  }
 
   RolloutResult result;
   result.server = client.server();

@@ -1,6 +1,7 @@
 // modskill-client rollout: evaluates a TorchScript policy on the server's clips, prints one line
 // of metrics per clip and their means, and with --out writes them (per body, per part and, with
-// --frames, the streamed body positions) as JSON.
+// --frames, the streamed body positions) as JSON; with --html writes the viewer page of the
+// rollout beside its reference.
 #ifndef MODSKILL_CLIENT_CPP_ROLLOUT_COMMAND_H_
 #define MODSKILL_CLIENT_CPP_ROLLOUT_COMMAND_H_
 
@@ -19,6 +20,7 @@ struct RolloutOptions {
   std::vector<std::string> clips;  // empty: every clip
   std::string out;                 // JSON file to write; empty: none
   bool frames = false;             // stream per-frame body positions into `out`
+  std::string html;                // viewer page to write (the rollout beside its reference); empty: none
 };
 
 // Returns the exit code.

@@ -10,6 +10,8 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -24,6 +26,8 @@
 #include "common/atomic_file.h"
 #include "common/log.h"
 #include "common/policy/policy_checkpoint.h"
+#include "common/viewer/viewer_html.h"
+#include "common/viewer/viewer_wire.h"
 #include "learner/evaluation.h"
 #include "learner/tensorboard_writer.h"
 #include "learner/trainer.h"
@@ -85,6 +89,27 @@ int Fail(const std::string& message, int code = 1) {
   return code;
 }
 
+// eval.html's recorder. A page that cannot be made (a server without geometry, no three.js) is
+// a warning: the figures still count.
+std::optional<RolloutViewerRecorder> EvalPageRecorder(SimulationClient& client, const v1::EnvSpec& spec) {
+  auto motions = client.ListMotions();
+  absl::StatusOr<RolloutViewerRecorder> recorder =
+      motions.ok() ? PrepareRolloutPage(spec, *motions) : absl::StatusOr<RolloutViewerRecorder>(motions.status());
+  if (recorder.ok()) return *std::move(recorder);
+  LogLine("warning: no eval.html: %s", recorder.status().message());
+  return std::nullopt;
+}
+
+void WriteEvalPage(RolloutViewerRecorder& page, std::string title, const std::string& path) {
+  absl::StatusOr<ViewerScene> scene = page.TakeScene(std::move(title));
+  absl::Status status = scene.ok() ? WriteViewerHtml(path, *scene) : scene.status();
+  if (status.ok()) {
+    LogLine("wrote %s (the policy beside its reference, %d clips)", path, static_cast<int>(scene->clips.size()));
+  } else {
+    LogLine("warning: no eval.html: %s", status.message());
+  }
+}
+
 int RunEvaluation(const std::string& token) {
   const std::string checkpoint = absl::GetFlag(FLAGS_checkpoint);
   const bool baseline_only = absl::GetFlag(FLAGS_baseline);
@@ -107,6 +132,7 @@ int RunEvaluation(const std::string& token) {
   auto baseline = Evaluate(**client, "open-loop reference", *reference_policy, clips);
   if (!baseline.ok()) return Fail(std::string(baseline.status().message()));
   std::string markdown, json;
+  std::optional<RolloutViewerRecorder> page;
   if (baseline_only) {
     markdown = baseline->ToMarkdown("open-loop reference (no learning)");
     json = baseline->ToJson();
@@ -114,7 +140,10 @@ int RunEvaluation(const std::string& token) {
     auto bytes = ReadFileToString(checkpoint, size_t{2} << 30);
     if (!bytes.ok()) return Fail(absl::StrCat("--checkpoint: ", bytes.status().message()));
     LogLine("evaluating %s on %s", checkpoint, options.server);
-    auto report = Evaluate(**client, checkpoint, *bytes, clips);
+    page = EvalPageRecorder(**client, *spec);
+    auto report = Evaluate(**client, checkpoint, *bytes, clips,
+                           page ? [&page](const v1::RolloutFrame& frame) { page->Add(frame); }
+                                : std::function<void(const v1::RolloutFrame&)>());
     if (!report.ok()) return Fail(std::string(report.status().message()));
     markdown = report->ToMarkdown("ModSkill (modskill, " + absl::GetFlag(FLAGS_preset) + ")") +
                CompareWithBaseline(*report, *baseline);
@@ -132,6 +161,7 @@ int RunEvaluation(const std::string& token) {
     }
   }
   LogLine("wrote %s/eval.json and %s/eval.md", out_dir, out_dir);
+  if (page) WriteEvalPage(*page, absl::StrCat("evaluation of ", checkpoint), out_dir + "/eval.html");
   return 0;
 }
 

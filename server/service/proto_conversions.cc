@@ -2,7 +2,9 @@
 
 #include <cstring>
 
+#include "common/viewer/viewer_wire.h"
 #include "common/wire/tensor_codec.h"
+#include "server/core/motion/clip_view.h"
 
 namespace modskill {
 
@@ -32,6 +34,7 @@ void ToProto(const EnvSpec& spec, const HumanoidModel& humanoid, v1::EnvSpec* ou
     out->add_action_offset(static_cast<float>(humanoid.action_offset()[hinge]));
     out->add_action_scale(static_cast<float>(humanoid.action_scale()[hinge]));
   }
+  for (const ViewerBody& body : ViewerBodiesFromSpec(humanoid.spec())) ToWire(body, out->add_body_geometry());
 }
 
 void ToProto(const MotionClip& clip, v1::MotionInfo* out) {

@@ -59,22 +59,17 @@ class FrameStreamer {
 
   bool client_gone() const { return client_gone_; }
 
-  void Write(int clip_index, int frame, const std::vector<Vec3>& sim, const std::vector<Vec3>& ref) {
+  void Write(const RolloutFrameView& view) {
     if (client_gone_) return;
     v1::RolloutFrame* out = message_.mutable_frame();
-    out->set_clip(motions_.clip(clip_ids_[clip_index]).name);
-    out->set_frame(frame);
-    sim_flat_.clear();
-    ref_flat_.clear();
-    for (size_t b = 0; b < sim.size(); ++b) {
-      for (int k = 0; k < 3; ++k) {
-        sim_flat_.push_back(static_cast<float>(sim[b][k]));
-        ref_flat_.push_back(static_cast<float>(ref[b][k]));
-      }
-    }
-    const int64_t bodies = static_cast<int64_t>(sim.size());
-    SetFloatTensor({bodies, 3}, sim_flat_.data(), out->mutable_sim_body_pos());
-    SetFloatTensor({bodies, 3}, ref_flat_.data(), out->mutable_ref_body_pos());
+    out->set_clip(motions_.clip(clip_ids_[view.clip_index]).name);
+    out->set_frame(view.frame);
+    const int64_t bodies = static_cast<int64_t>(view.sim.body_pos.size());
+    WritePoses(view.sim, bodies, out->mutable_sim_body_pos(), out->mutable_sim_body_rot());
+    WritePoses(view.ref, bodies, out->mutable_ref_body_pos(), out->mutable_ref_body_rot());
+    out->set_mean_body_error_m(static_cast<float>(view.mean_body_error));
+    out->set_done(view.done);
+    out->set_terminated(view.terminated);
     client_gone_ = !writer_->Write(message_);
   }
 
@@ -82,8 +77,20 @@ class FrameStreamer {
   grpc::ServerWriter<v1::RolloutResponse>* writer_;
   const MotionLibrary& motions_;
   const std::vector<int>& clip_ids_;
+  // Positions [bodies, 3] and rotations [bodies, 4] (w x y z) as float32.
+  void WritePoses(const HumanoidState& state, int64_t bodies, v1::Tensor* pos, v1::Tensor* rot) {
+    flat_.clear();
+    for (const Vec3& p : state.body_pos) flat_.insert(flat_.end(), {float(p.x()), float(p.y()), float(p.z())});
+    SetFloatTensor({bodies, 3}, flat_.data(), pos);
+    flat_.clear();
+    for (const Quat& q : state.body_rot) {
+      flat_.insert(flat_.end(), {float(q.w()), float(q.x()), float(q.y()), float(q.z())});
+    }
+    SetFloatTensor({bodies, 4}, flat_.data(), rot);
+  }
+
   v1::RolloutResponse message_;
-  std::vector<float> sim_flat_, ref_flat_;
+  std::vector<float> flat_;
   bool client_gone_ = false;
 };
 
@@ -113,9 +120,7 @@ grpc::Status SimulationService::Rollout(grpc::ServerContext* context, const v1::
   FrameStreamer frames(writer, *motions, *clip_ids);
   RolloutFrameCallback on_frame = nullptr;
   if (request->stream_frames()) {
-    on_frame = [&frames](int clip, int frame, const std::vector<Vec3>& sim, const std::vector<Vec3>& ref) {
-      frames.Write(clip, frame, sim, ref);
-    };
+    on_frame = [&frames](const RolloutFrameView& view) { frames.Write(view); };
   }
   PolicyCheckpoint* checkpoint = policy->get();
   auto metrics = RunRollout(

@@ -92,7 +92,7 @@ absl::StatusOr<std::vector<ClipRolloutMetrics>> RunRollout(std::shared_ptr<const
   HumanoidState sim, ref;
   sim.Resize(humanoid->num_bodies(), humanoid->num_hinges());
   ref.Resize(humanoid->num_bodies(), humanoid->num_hinges());
-  auto record = [&](int i) {
+  auto record = [&](int i, bool is_done, bool is_terminated) {
     const MotionClip& clip = motions->clip(clip_ids[i]);
     ReadSimulatedState(*humanoid, batch.env(i).data(), &sim);
     ReadReferenceState(clip, batch.env(i).frame(), &ref);
@@ -101,9 +101,9 @@ absl::StatusOr<std::vector<ClipRolloutMetrics>> RunRollout(std::shared_ptr<const
     double mean = 0;
     for (size_t b = 0; b < sim.body_pos.size(); ++b) mean += (sim.body_pos[b] - ref.body_pos[b]).norm() / sim.body_pos.size();
     trajectories[i].worst_mean_error = std::max(trajectories[i].worst_mean_error, mean);
-    if (on_frame) on_frame(i, batch.env(i).frame(), sim.body_pos, ref.body_pos);
+    if (on_frame) on_frame({i, batch.env(i).frame(), sim, ref, mean, is_done, is_terminated});
   };
-  for (int i = 0; i < n; ++i) record(i);
+  for (int i = 0; i < n; ++i) record(i, false, false);
 
   std::vector<float> actions(static_cast<size_t>(n) * batch.spec().action_size);
   std::vector<bool> finished(n, false);
@@ -115,10 +115,11 @@ absl::StatusOr<std::vector<ClipRolloutMetrics>> RunRollout(std::shared_ptr<const
     }
     for (int i = 0; i < n; ++i) {
       if (finished[i]) continue;
-      record(i);
-      if (batch.buffers().done[i]) {
+      const bool done = batch.buffers().done[i];
+      terminated[i] = done && !batch.buffers().truncated[i];
+      record(i, done, terminated[i]);
+      if (done) {
         finished[i] = true;
-        terminated[i] = !batch.buffers().truncated[i];
         --remaining;
       }
     }

@@ -11,6 +11,7 @@
 
 #include "absl/status/status.h"
 #include "server/core/env/env_batch.h"
+#include "server/core/env/humanoid_state.h"
 
 namespace modskill {
 
@@ -40,10 +41,19 @@ struct ClipRolloutMetrics {
   double worst_mean_body_error = 0;
 };
 
-// Called for every simulated frame of every clip when set (positions in world coordinates).
-using RolloutFrameCallback =
-    std::function<void(int clip_index, int frame, const std::vector<Vec3>& sim_body_pos,
-                       const std::vector<Vec3>& ref_body_pos)>;
+// One simulated frame of one clip: the character and its reference (world poses).
+struct RolloutFrameView {
+  int clip_index = 0;  // into the clip_ids given to RunRollout
+  int frame = 0;       // the clip's frame
+  const HumanoidState& sim;
+  const HumanoidState& ref;
+  double mean_body_error = 0;  // m
+  bool done = false;           // the clip's last frame in this rollout
+  bool terminated = false;     // done by termination (not at the clip's end)
+};
+
+// Called for every simulated frame of every clip when set, the first frame included.
+using RolloutFrameCallback = std::function<void(const RolloutFrameView&)>;
 
 // Rolls out every clip of `clip_ids` (indices into `motions`) in parallel envs.
 absl::StatusOr<std::vector<ClipRolloutMetrics>> RunRollout(std::shared_ptr<const HumanoidModel> humanoid,
