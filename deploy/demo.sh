@@ -2,7 +2,8 @@
 # The main job: set up and build, start a simulation server on the shipped motion library,
 # train the small ModSkill preset against it for a few minutes (MODSKILL_TRAIN_MIN, default 5),
 # then evaluate the trained policy on every clip and print the table. The run (checkpoints,
-# exported policy.pt, progress.csv, TensorBoard events, eval.json/eval.md) lands in runs/demo.
+# exported policy.pt, progress.csv, TensorBoard events, eval.json/eval.md and the viewer page
+# eval.html: the policy's character beside its reference on every clip) lands in runs/demo.
 # Extra arguments go to modskill-learner (e.g. --motions deepmimic_walk).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -16,6 +17,7 @@ trap 'kill -TERM $SERVER_PID 2>/dev/null; wait $SERVER_PID 2>/dev/null || true' 
 "$BUILD/client/modskill-client" --server "127.0.0.1:$PORT" --timeout_s 20 describe
 "$BUILD/learner/modskill-learner" --servers "127.0.0.1:$PORT" --run_dir "$RUN_DIR" --preset small \
     --iterations 100000 --time_budget_min "${MODSKILL_TRAIN_MIN:-5}" --envs_per_server 256 "$@"
+rm -f "$RUN_DIR/eval.html"  # a page from an earlier run must not pass for this one's
 "$BUILD/learner/modskill-learner" --eval --checkpoint "$RUN_DIR/policy.pt" --servers "127.0.0.1:$PORT"
 # The eval table above ends with the open-loop reference baseline on the same clips; the curve:
 if /usr/bin/python3 client/python/examples/plot_learning_curve.py "$RUN_DIR/progress.csv" \
@@ -23,3 +25,6 @@ if /usr/bin/python3 client/python/examples/plot_learning_curve.py "$RUN_DIR/prog
   echo "learning curve: $RUN_DIR/learning_curve.png"
 fi
 echo "evaluation: $RUN_DIR/eval.md (policy and open-loop reference baseline)"
+if [ -f "$RUN_DIR/eval.html" ]; then
+  echo "viewer: $(cd "$RUN_DIR" && pwd)/eval.html (open it in a browser; offline, one file)"
+fi

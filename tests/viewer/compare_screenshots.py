@@ -1,8 +1,9 @@
 #!/usr/bin/python3
 """Checks two screenshots of the viewer page: neither blank, the character visible in both, and
-its pixels moved between the two frames.
+its pixels moved between the two frames. With --simulated (a rollout page) the simulated
+character, drawn in orange, must be visible in both too.
 
-  compare_screenshots.py FRAME_A.png FRAME_B.png
+  compare_screenshots.py [--simulated] FRAME_A.png FRAME_B.png
 
 The reference character is drawn in blue (COLORS.reference in viewer_page.html); its pixels are
 those clearly bluer than red, which neither the sky, the ground nor the grid are.
@@ -18,7 +19,12 @@ def character_mask(image):
     return (rgb[..., 2] - rgb[..., 0] > 0.3) & (rgb[..., 2] - rgb[..., 1] > 0.15)
 
 
-def main(a_path, b_path):
+def simulated_mask(image):
+    rgb = image[..., :3].astype(numpy.float64)
+    return (rgb[..., 0] - rgb[..., 2] > 0.3) & (rgb[..., 0] - rgb[..., 1] > 0.1)
+
+
+def main(a_path, b_path, simulated=False):
     failures = []
     masks = []
     for path in (a_path, b_path):
@@ -32,6 +38,11 @@ def main(a_path, b_path):
             failures.append(f"{path}: blank (colour spread {spread:.3f})")
         if mask.sum() < 300:
             failures.append(f"{path}: no character drawn ({int(mask.sum())} blue pixels)")
+        if simulated:
+            orange = int(simulated_mask(image).sum())
+            print(f"{path}: simulated character pixels {orange}")
+            if orange < 300:
+                failures.append(f"{path}: no simulated character drawn ({orange} orange pixels)")
         masks.append(mask)
     if masks[0].shape != masks[1].shape:
         failures.append("screenshots differ in size")
@@ -47,6 +58,9 @@ def main(a_path, b_path):
 
 
 if __name__ == "__main__":
-    if len(sys.argv) != 3:
+    args = sys.argv[1:]
+    with_simulated = "--simulated" in args
+    args = [a for a in args if a != "--simulated"]
+    if len(args) != 2:
         sys.exit(__doc__)
-    sys.exit(main(sys.argv[1], sys.argv[2]))
+    sys.exit(main(args[0], args[1], with_simulated))

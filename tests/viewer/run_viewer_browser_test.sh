@@ -5,7 +5,9 @@
 # opens it from disk in headless Chromium (no server, no network) at two frames, and checks
 # that the canvas is not blank, that the character moved between the frames
 # (compare_screenshots.py), that the page drew the frame it was asked for and logged no
-# JavaScript error (<body data-status="ok">), and, as a control, that an error is seen.
+# JavaScript error (<body data-status="ok">), and, as a control, that an error is seen. Last, a
+# rollout page from modskill-client against a live server (both characters drawn) and its
+# filmstrip PNG (tools/filmstrip.sh).
 #
 #   tests/viewer/run_viewer_browser_test.sh BUILD_DIR
 #
@@ -99,6 +101,43 @@ echo "frame 30: $tag"
 tag=$(body_tag "file://$PAGE#clip=no_such_clip")
 echo "unknown clip: $tag"
 [[ "$tag" == *'data-status="error: '*'no_such_clip'* ]] || fail "an error in the page went unseen: $tag"
+
+# A rollout's page (modskill-client rollout --html against a live server, the shipped walk
+# policy): both characters drawn and moving, and its filmstrip (tools/filmstrip.sh).
+SERVER="$BUILD_DIR/server/modskill-server" CLIENT="$BUILD_DIR/client/modskill-client"
+if [ -x "$SERVER" ] && [ -x "$CLIENT" ]; then
+  port=$("$PYTHON" -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
+  "$SERVER" --port "$port" --bind 127.0.0.1 --threads 1 --no_generative > "$WORK/server.log" 2>&1 &
+  server_pid=$!
+  trap 'kill -TERM $server_pid 2>/dev/null; wait $server_pid 2>/dev/null; rm -rf "$WORK"' EXIT
+  ROLLOUT="$WORK/rollout.html"
+  if ! "$CLIENT" --server "127.0.0.1:$port" --timeout_s 30 rollout --clip deepmimic_walk \
+      --checkpoint "$REPO_DIR/data/policies/walk_small/policy.pt" --html "$ROLLOUT" > "$WORK/rollout.log" 2>&1; then
+    cat "$WORK/rollout.log"; fail "modskill-client rollout --html"
+  else
+    for frame in 0 30; do
+      browser --screenshot="$WORK/rollout$frame.png" "file://$ROLLOUT#clip=deepmimic_walk&frame=$frame&mode=side" \
+        > "$WORK/rollout_screenshot$frame.log" 2>&1
+    done
+    "$PYTHON" "$HERE/compare_screenshots.py" --simulated "$WORK/rollout0.png" "$WORK/rollout30.png" \
+      || fail "rollout page screenshots"
+    tag=$(body_tag "file://$ROLLOUT#clip=deepmimic_walk&frame=30")
+    [[ "$tag" == *'data-status="ok"'* ]] || fail "rollout page: status not ok: $tag"
+    if "$REPO_DIR/tools/filmstrip.sh" "$ROLLOUT" deepmimic_walk "$WORK/strip.png" --poses 6 --mode side \
+        > "$WORK/filmstrip.log" 2>&1; then
+      "$PYTHON" "$HERE/check_filmstrip.py" "$WORK/strip.png" || fail "filmstrip"
+    else
+      cat "$WORK/filmstrip.log"; fail "tools/filmstrip.sh"
+    fi
+    # The control: a clip the page does not hold is an error, and no PNG is written.
+    if "$REPO_DIR/tools/filmstrip.sh" "$ROLLOUT" no_such_clip "$WORK/bad.png" > "$WORK/bad.log" 2>&1 \
+        || [ -e "$WORK/bad.png" ] || ! grep -q no_such_clip "$WORK/bad.log"; then
+      cat "$WORK/bad.log"; fail "filmstrip of an unknown clip was not a clear error"
+    fi
+  fi
+else
+  fail "missing $SERVER or $CLIENT (build the modskill-server and modskill-client targets)"
+fi
 
 if ((failures)); then
   echo "viewer_browser_test: $failures failure(s); the page and screenshots were in $WORK"
