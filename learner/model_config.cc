@@ -70,7 +70,32 @@ absl::Status NetworkLayout::Validate() const {
   if (absl::Status s = CheckTiling(*this, "obs", obs_size, &PartSlices::obs_start, &PartSlices::obs_size); !s.ok()) {
     return s;
   }
+  for (const PartSlices& part : parts) {
+    for (const auto& [start, size] : part.self_obs) {
+      if (size <= 0 || start < part.obs_start || start + size > part.obs_start + part.obs_size) {
+        return absl::InvalidArgumentError(absl::StrCat("network layout: part '", part.name, "' self_obs [", start, ", ",
+                                                       start + size, ") is not inside its obs slice"));
+      }
+    }
+  }
   return CheckTiling(*this, "action", action_size, &PartSlices::action_start, &PartSlices::action_size);
+}
+
+absl::StatusOr<ModelConfig::ControllerInput> ParseControllerInput(absl::string_view name) {
+  if (name == "part_obs") return ModelConfig::ControllerInput::kPartObservation;
+  if (name == "proprioception") return ModelConfig::ControllerInput::kProprioception;
+  return absl::InvalidArgumentError(
+      absl::StrCat("--controller_input: '", name, "' is not part_obs or proprioception"));
+}
+
+const char* ControllerInputName(ModelConfig::ControllerInput input) {
+  return input == ModelConfig::ControllerInput::kProprioception ? "proprioception" : "part_obs";
+}
+
+int64_t PartSlices::self_obs_size() const {
+  int64_t size = 0;
+  for (const auto& [start, length] : self_obs) size += length;
+  return size;
 }
 
 NetworkLayout LayoutFromWireSpec(const v1::EnvSpec& spec) {
@@ -85,6 +110,7 @@ NetworkLayout LayoutFromWireSpec(const v1::EnvSpec& spec) {
     slices.obs_size = part.obs().size();
     slices.action_start = part.action().start();
     slices.action_size = part.action().size();
+    for (const v1::Slice& self : part.self_obs()) slices.self_obs.emplace_back(self.start(), self.size());
     layout.parts.push_back(slices);
   }
   return layout;

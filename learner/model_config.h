@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "absl/status/status.h"
@@ -24,6 +25,12 @@ struct ModelConfig {
   double log_std = -2.9;    // fixed Gaussian sigma = exp(-2.9) (PHC)
   bool whole_body = false;  // ablation: one controller for the whole body (input: all z concatenated + full obs)
   bool attention = true;    // ablation: false -> each part's z comes from its own value map only (attention = identity)
+  // What a part's controller reads beside z_k: the part's whole observation (proprioception and
+  // the reference features) or its proprioception only, so that the reference reaches it only
+  // through z and a high-level policy can drive the frozen controllers with its own z (skill
+  // reuse; PULSE's and ASE's low levels read proprioception and the latent only).
+  enum class ControllerInput { kPartObservation, kProprioception };
+  ControllerInput controller_input = ControllerInput::kPartObservation;
 
   // "paper": attention {256} -> 64, controllers {2048,1536,1024,512}, critic {2048,1536,1024,512},
   //          discriminator {1024,512}.
@@ -33,9 +40,16 @@ struct ModelConfig {
   static absl::StatusOr<ModelConfig> Preset(absl::string_view name);
 };
 
+// "part_obs" or "proprioception" (--controller_input); INVALID_ARGUMENT naming the value otherwise.
+absl::StatusOr<ModelConfig::ControllerInput> ParseControllerInput(absl::string_view name);
+const char* ControllerInputName(ModelConfig::ControllerInput input);
+
 struct PartSlices {
   std::string name;
   int64_t obs_start = 0, obs_size = 0, action_start = 0, action_size = 0;
+  // The part's proprioceptive features: (start, size) per body, inside the part's obs slice.
+  std::vector<std::pair<int64_t, int64_t>> self_obs;
+  int64_t self_obs_size() const;
 };
 
 struct NetworkLayout {

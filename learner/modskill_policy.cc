@@ -22,8 +22,11 @@ ModSkillPolicyImpl::ModSkillPolicyImpl(const NetworkLayout& layout, const ModelC
       TORCH_CHECK(part.action_start == next_action, "ModSkillPolicy: part '", part.name,
                   "' actions are not contiguous in part order");
       next_action += part.action_size;
+      const int64_t state_size = proprioceptive() ? part.self_obs_size() : part.obs_size;
+      TORCH_CHECK(state_size > 0, "ModSkillPolicy: part '", part.name,
+                  "' has no proprioceptive features for its controller (the server describes none)");
       controllers_.push_back(register_module("controller" + std::to_string(p),
-                                             PartController(embed + part.obs_size, part.action_size,
+                                             PartController(embed + state_size, part.action_size,
                                                             config.controller_hidden)));
     }
     TORCH_CHECK(next_action == layout.action_size, "ModSkillPolicy: part actions do not cover action_size");
@@ -42,11 +45,17 @@ torch::Tensor ModSkillPolicyImpl::forward(const torch::Tensor& normalized_obs) {
   }
   std::vector<torch::Tensor> means;
   for (size_t p = 0; p < controllers_.size(); ++p) {
-    const PartSlices& part = layout_.parts[p];
-    const torch::Tensor part_obs = normalized_obs.slice(1, part.obs_start, part.obs_start + part.obs_size);
-    means.push_back(controllers_[p]->forward(torch::cat({z.select(1, p), part_obs}, 1)));  // [B, A_p]
+    means.push_back(controllers_[p]->forward(torch::cat({z.select(1, p), ControllerState(normalized_obs, p)}, 1)));
   }
   return torch::cat(means, 1);  // [B, A]
+}
+
+torch::Tensor ModSkillPolicyImpl::ControllerState(const torch::Tensor& normalized_obs, size_t part_index) const {
+  const PartSlices& part = layout_.parts[part_index];
+  if (!proprioceptive()) return normalized_obs.slice(1, part.obs_start, part.obs_start + part.obs_size);
+  std::vector<torch::Tensor> slices;
+  for (const auto& [start, size] : part.self_obs) slices.push_back(normalized_obs.slice(1, start, start + size));
+  return torch::cat(slices, 1);  // [B, self features of the part]
 }
 
 torch::Tensor ModSkillPolicyImpl::LogProb(const torch::Tensor& mean, const torch::Tensor& log_std,

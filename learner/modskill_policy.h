@@ -1,6 +1,6 @@
 // ModSkill's policy: skill attention turns each part's observation into a skill embedding z_k,
-// and one low-level controller per part maps [z_k, part k's observation] to the means of part
-// k's actions. A Gaussian with a fixed diagonal sigma (log_std, not trained) around the means.
+// and one low-level controller per part maps [z_k, part k's observation] (or, with
+// ControllerInput::kProprioception, [z_k, part k's proprioception]) to the means of part k's actions. A Gaussian with a fixed diagonal sigma (log_std, not trained) around the means.
 #ifndef MODSKILL_LEARNER_MODSKILL_POLICY_H_
 #define MODSKILL_LEARNER_MODSKILL_POLICY_H_
 
@@ -26,6 +26,11 @@ class ModSkillPolicyImpl : public torch::nn::Module {
 
   // normalized_obs: [B, obs_size] -> z [B, P, E], attention [B, P, P]
   SkillAttentionOutput skills(const torch::Tensor& normalized_obs);
+
+  // What part p's controller reads beside z_p (config.controller_input): [B, part obs] or
+  // [B, the part's proprioceptive features].
+  torch::Tensor ControllerState(const torch::Tensor& normalized_obs, size_t part_index) const;
+  bool proprioceptive() const { return config_.controller_input == ModelConfig::ControllerInput::kProprioception; }
 
   // Diagonal Gaussian log-density: mean, actions [..., A], log_std [A] (or broadcastable) -> [...],
   // summed over the last dim.

@@ -70,6 +70,15 @@ std::string Slice(const PartSlices& part) {
   return absl::StrCat("x[:, ", part.obs_start, ":", part.obs_start + part.obs_size, "]");
 }
 
+// ModSkillPolicy::ControllerState as TorchScript: the part's slice, or its bodies' self slices.
+std::string ControllerState(const ModSkillPolicyImpl& policy, size_t p) {
+  const PartSlices& part = policy.layout().parts[p];
+  if (!policy.proprioceptive()) return Slice(part);
+  std::vector<std::string> slices;
+  for (const auto& [start, size] : part.self_obs) slices.push_back(absl::StrCat("x[:, ", start, ":", start + size, "]"));
+  return absl::StrCat("torch.cat([", absl::StrJoin(slices, ", "), "], 1)");
+}
+
 }  // namespace
 
 std::string PolicyScriptSource(const ModSkillPolicyImpl& policy) {
@@ -117,7 +126,7 @@ std::string PolicyScriptSource(const ModSkillPolicyImpl& policy) {
   } else {
     std::vector<std::string> actions;
     for (size_t p = 0; p < num_parts; ++p) {
-      absl::StrAppend(&src, "    c", p, " = torch.cat([z[:, ", p, "], ", Slice(layout.parts[p]), "], 1)\n");
+      absl::StrAppend(&src, "    c", p, " = torch.cat([z[:, ", p, "], ", ControllerState(policy, p), "], 1)\n");
       actions.push_back(absl::StrCat("a", p));
       EmitMlp(*policy.controllers()[p]->mlp(), PartPrefix(p, "controller"), absl::StrCat("c", p), actions.back(),
               &src);

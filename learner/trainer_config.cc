@@ -37,6 +37,9 @@ absl::Status TrainerConfig::Validate() const {
   }
   if (iterations < 0) return bad("iterations", iterations, "must be >= 0");
   if (horizon < 1) return bad("horizon", horizon, "must be >= 1");
+  if (model.whole_body && model.controller_input == ModelConfig::ControllerInput::kProprioception) {
+    return absl::InvalidArgumentError("--controller_input proprioception: not with --whole_body (per-part controllers only)");
+  }
   if (epochs < 1) return bad("epochs", epochs, "must be >= 1");
   if (minibatch_size < 1) return bad("minibatch_size", minibatch_size, "must be >= 1");
   if (!(learning_rate > 0 && learning_rate < 1)) return bad("learning_rate", learning_rate, "must be in (0, 1)");
@@ -92,6 +95,7 @@ std::string TrainerConfig::ToJson() const {
   json["preset"] = model.preset;
   json["whole_body"] = model.whole_body;
   json["attention"] = model.attention;
+  json["controller_input"] = ControllerInputName(model.controller_input);
   json["embed_dim"] = model.embed_dim;
   json["iterations"] = iterations;
   json["horizon"] = horizon;

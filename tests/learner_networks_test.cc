@@ -374,6 +374,53 @@ TEST(LearnerNetworksTest, AblationsBuildRunAndExport) {
   ExpectExportMatches(neither, "5part", "learner_export_whole_body_no_attention.pt");
 }
 
+// Proprioceptive controllers (skill reuse): each reads z_p and exactly its bodies' self
+// features, so changing only the reference features changes the actions through z alone; the
+// export computes the same.
+TEST(LearnerNetworksTest, ProprioceptiveControllersReadTheReferenceOnlyThroughZ) {
+  torch::manual_seed(9);
+  const NetworkLayout layout = Layout("5part");
+  const EnvSpec& env = Spec("5part");
+  ModelConfig config = Config();
+  config.controller_input = ModelConfig::ControllerInput::kProprioception;
+  ModSkillPolicy policy(layout, config);
+  // The server describes each body's self block: 13 for the root, 15 for every other body.
+  int64_t self_total = 0;
+  for (size_t p = 0; p < layout.parts.size(); ++p) {
+    const PartSlices& part = layout.parts[p];
+    ASSERT_EQ(part.self_obs.size(), env.layout.parts[p].bodies.size()) << part.name;
+    EXPECT_EQ(policy->controllers()[p]->input_size(), config.embed_dim + part.self_obs_size()) << part.name;
+    self_total += part.self_obs_size();
+  }
+  EXPECT_EQ(self_total, env.self_obs_size);
+
+  // A mask of the self features: perturbing everything else leaves every ControllerState alone.
+  torch::Tensor is_self = torch::zeros({layout.obs_size}, torch::kBool);
+  for (const PartSlices& part : layout.parts) {
+    for (const auto& [start, size] : part.self_obs) is_self.slice(0, start, start + size).fill_(true);
+  }
+  const torch::Tensor obs = torch::randn({8, layout.obs_size});
+  const torch::Tensor reference_changed = torch::where(is_self, obs, obs + torch::randn({8, layout.obs_size}));
+  torch::NoGradGuard no_grad;
+  for (size_t p = 0; p < layout.parts.size(); ++p) {
+    EXPECT_TRUE(torch::equal(policy->ControllerState(obs, p), policy->ControllerState(reference_changed, p)));
+  }
+  // ... while the actions do change (through z), and changing a self feature changes its part's state.
+  EXPECT_GT((policy->forward(obs) - policy->forward(reference_changed)).abs().max().item<float>(), 1e-4);
+  torch::Tensor self_changed = obs.clone();
+  const auto [knee_start, knee_size] = layout.parts[0].self_obs[1];
+  self_changed.slice(1, knee_start, knee_start + knee_size) += 1.0;
+  EXPECT_FALSE(torch::equal(policy->ControllerState(obs, 0), policy->ControllerState(self_changed, 0)));
+  ExpectExportMatches(policy, "5part", "learner_export_proprioceptive.pt");
+
+  EXPECT_FALSE(ParseControllerInput("reference").ok());
+  EXPECT_THAT(std::string(ParseControllerInput("reference").status().message()), HasSubstr("--controller_input"));
+  // A self slice outside its part's obs slice is a layout error naming the part.
+  NetworkLayout outside = layout;
+  outside.parts[1].self_obs[0].first = 0;
+  EXPECT_THAT(std::string(outside.Validate().message()), HasSubstr(outside.parts[1].name));
+}
+
 // (8) The AMP gradient penalty: positive in general, zero when the logit ignores its input.
 TEST(LearnerNetworksTest, GradientPenalty) {
   torch::manual_seed(9);

@@ -260,6 +260,11 @@ TEST(LearnerTrainingTest, BadConfigurationsAreClearErrors) {
       {[](TrainerConfig* c) { c->termination_bodies = "toes"; }, "--termination_bodies"},
       {[](TrainerConfig* c) { c->curriculum_start = 0.25, c->curriculum_end = 1.0; }, "--termination_curriculum"},
       {[&](TrainerConfig* c) { c->curriculum_start = nan, c->curriculum_end = 0.25; }, "--termination_curriculum"},
+      {[](TrainerConfig* c) {
+         c->model.whole_body = true;
+         c->model.controller_input = ModelConfig::ControllerInput::kProprioception;
+       },
+       "--controller_input"},
   };
   for (const Bad& b : bad) {
     TrainerConfig broken = SmallConfig({1}, RunDir("bad"));

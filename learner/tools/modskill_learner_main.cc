@@ -43,6 +43,9 @@ ABSL_FLAG(std::string, part_layout, "5part", "body-part layout: 5part, 3part, 2p
 ABSL_FLAG(std::vector<std::string>, motions, {}, "clips to train on (default: the server's library)");
 ABSL_FLAG(bool, whole_body, false, "ablation: one controller for the whole body");
 ABSL_FLAG(bool, no_attention, false, "ablation: no attention across parts");
+ABSL_FLAG(std::string, controller_input, "part_obs",
+          "what each part's controller reads beside z: part_obs (the part's whole observation) or proprioception "
+          "(the reference reaches it only through z, so that high-level task policies can reuse the controllers)");
 ABSL_FLAG(int, horizon, 32, "steps per env per iteration");
 ABSL_FLAG(int, epochs, 0, "PPO epochs per iteration (0: the preset's)");
 ABSL_FLAG(int, minibatch_size, 0, "PPO minibatch (0: the preset's)");
@@ -195,6 +198,9 @@ absl::StatusOr<TrainerConfig> ConfigFromFlags(const std::string& token) {
   config->motions = absl::GetFlag(FLAGS_motions);
   config->model.whole_body = absl::GetFlag(FLAGS_whole_body);
   config->model.attention = !absl::GetFlag(FLAGS_no_attention);
+  auto controller_input = ParseControllerInput(absl::GetFlag(FLAGS_controller_input));
+  if (!controller_input.ok()) return controller_input.status();
+  config->model.controller_input = *controller_input;
   config->horizon = absl::GetFlag(FLAGS_horizon);
   if (absl::GetFlag(FLAGS_epochs) > 0) config->epochs = absl::GetFlag(FLAGS_epochs);
   if (absl::GetFlag(FLAGS_discriminator_epochs) > 0) config->discriminator_epochs = absl::GetFlag(FLAGS_discriminator_epochs);

@@ -19,6 +19,11 @@ void ToProto(const EnvSpec& spec, const HumanoidModel& humanoid, v1::EnvSpec* ou
     part->mutable_obs()->set_size(spec.part_obs[p].size);
     part->mutable_action()->set_start(spec.part_action[p].start);
     part->mutable_action()->set_size(spec.part_action[p].size);
+    for (int b : spec.layout.parts[p].bodies) {
+      v1::Slice* self = part->add_self_obs();
+      self->set_start(spec.body_obs_start[b]);
+      self->set_size(b == 0 ? kSelfFeaturesRoot : kSelfFeaturesPerBody);
+    }
   }
   out->set_obs_size(spec.obs_size);
   out->set_self_obs_size(spec.self_obs_size);
