@@ -24,33 +24,17 @@
 #include "server/core/motion/clip_view.h"
 #include "tests/server_fixture.h"
 #include "tests/simulation_server_fixture.h"
+#include "tests/viewer_page_reading.h"
 
 namespace modskill {
 namespace {
 
 using ::testing::HasSubstr;
 
-std::vector<float> DecodeFloats(const std::string& b64) {
-  std::string bytes;
-  EXPECT_TRUE(absl::Base64Unescape(b64, &bytes));
-  std::vector<float> values(bytes.size() / 4);
-  std::memcpy(values.data(), bytes.data(), values.size() * 4);
-  return values;
-}
-
 std::vector<float> TensorFloats(const v1::Tensor& tensor) {
   std::vector<float> values(tensor.data().size() / 4);
   std::memcpy(values.data(), tensor.data().data(), values.size() * 4);
   return values;
-}
-
-// The scene JSON exactly as the page's script reads it.
-nlohmann::json PageScene(const std::string& html) {
-  const std::string open = "<script id=\"modskill-scene\" type=\"application/json\">";
-  const size_t begin = html.find(open);
-  EXPECT_NE(begin, std::string::npos);
-  const size_t end = html.find("</script>", begin);
-  return nlohmann::json::parse(html.substr(begin + open.size(), end - begin - open.size()));
 }
 
 // The open-loop reference (a zero residual policy): it tracks for a while, then the walk or the

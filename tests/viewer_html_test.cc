@@ -17,6 +17,7 @@
 #include "server/core/motion/clip_view.h"
 #include "server/core/motion/motion_library.h"
 #include "server/core/sim/humanoid_model.h"
+#include "tests/viewer_page_reading.h"
 
 namespace modskill {
 namespace {
@@ -58,23 +59,6 @@ class ViewerHtmlTest : public ::testing::Test {
   HumanoidSpec spec_;
   MotionClip clip_;
 };
-
-std::vector<float> DecodeFloats(const std::string& b64) {
-  std::string bytes;
-  EXPECT_TRUE(absl::Base64Unescape(b64, &bytes));
-  std::vector<float> values(bytes.size() / 4);
-  std::memcpy(values.data(), bytes.data(), values.size() * 4);  // little-endian, as the page reads it
-  return values;
-}
-
-// The scene JSON exactly as the page's script reads it.
-nlohmann::json PageScene(const std::string& html) {
-  const std::string open = "<script id=\"modskill-scene\" type=\"application/json\">";
-  const size_t begin = html.find(open);
-  EXPECT_NE(begin, std::string::npos);
-  const size_t end = html.find("</script>", begin);
-  return nlohmann::json::parse(html.substr(begin + open.size(), end - begin - open.size()));
-}
 
 TEST_F(ViewerHtmlTest, PageFramesEqualTheClipsBodyPoses) {
   const std::string path = dir_ + "/walk.html";
