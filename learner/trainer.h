@@ -117,8 +117,10 @@ class Trainer {
   // Episode figures of the recently ended episodes; moves the termination curriculum.
   void SummarizeEpisodes(IterationStats* stats);
   void Summarize(const TrainingBatch& batch, IterationStats* stats);
-  // Notes how the episodes that ended in `result` went, for the session's failure report.
-  absl::Status RecordEpisodeEnds(SessionSlot* slot, const v1::StepResult& result);
+  // Notes how the episodes that ended in `result` went, for the session's failure report;
+  // `done` and `truncated` are the result's flags as RecordStep decoded them (one per env).
+  absl::Status RecordEpisodeEnds(SessionSlot* slot, const v1::StepResult& result, const float* done,
+                                 const float* truncated);
   // Sends each live session its failure list and logs the hardest clips.
   void ReportFailures();
 

@@ -140,13 +140,12 @@ absl::Status Trainer::RecordStep(SlotRollout& r, int t) {
       lengths[i] = 0;
     }
   }
-  return RecordEpisodeEnds(r.slot, result);
+  return RecordEpisodeEnds(r.slot, result, done_data, truncated_data);
 }
 
-absl::Status Trainer::RecordEpisodeEnds(SessionSlot* slot, const v1::StepResult& result) {
+absl::Status Trainer::RecordEpisodeEnds(SessionSlot* slot, const v1::StepResult& result, const float* done,
+                                        const float* truncated) {
   const int n = slot->num_envs();
-  const std::string& done = result.done().data();
-  const std::string& truncated = result.truncated().data();
   std::vector<int32_t> clip, frame;
   std::vector<float> part_error;
   if (absl::Status status = ReadInt32Tensor(result.ended_clip_id(), "StepResult.ended_clip_id", {n}, &clip); !status.ok()) {
@@ -167,13 +166,13 @@ absl::Status Trainer::RecordEpisodeEnds(SessionSlot* slot, const v1::StepResult&
   PendingReports& pending = pending_reports_[slot];
   if (pending.generation != slot->generation) pending = PendingReports{slot->generation, {}};
   for (int i = 0; i < n; ++i) {
-    if (!done[i]) continue;
+    if (done[i] <= 0.5f) continue;
     const std::string& name = slot->stream->clip_name(clip[i]);
     if (name.empty()) continue;
     v1::ClipFailure failure;
     failure.set_clip(name);
     failure.set_frame(frame[i]);
-    failure.set_terminated(!truncated[i]);
+    failure.set_terminated(truncated[i] <= 0.5f);
     bool finite = true;
     for (int p = 0; p < parts; ++p) finite &= std::isfinite(part_error[i * parts + p]);
     if (failure.terminated() && finite) {

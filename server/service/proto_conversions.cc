@@ -1,6 +1,8 @@
 #include "server/service/proto_conversions.h"
 
 #include <cstring>
+#include <initializer_list>
+#include <type_traits>
 
 #include "common/viewer/viewer_wire.h"
 #include "common/wire/tensor_codec.h"
@@ -88,14 +90,20 @@ void ToProto(const std::vector<std::string>& part_names, const PendingMotionSet&
 
 namespace {
 
-void EncodeRows(const std::vector<float>& rows, int64_t n, int64_t width, v1::Tensor* out) {
-  width == StepResultWidths::kVector ? SetFloatTensor({n}, rows.data(), out) : SetFloatTensor({n, width}, rows.data(), out);
-}
-void EncodeRows(const std::vector<int32_t>& rows, int64_t n, int64_t width, v1::Tensor* out) {
-  width == StepResultWidths::kVector ? SetInt32Tensor({n}, rows.data(), out) : SetInt32Tensor({n, width}, rows.data(), out);
-}
-void EncodeRows(const std::vector<uint8_t>& rows, int64_t n, int64_t width, v1::Tensor* out) {
-  width == StepResultWidths::kVector ? SetUint8Tensor({n}, rows.data(), out) : SetUint8Tensor({n, width}, rows.data(), out);
+// One field of the step result: [n] when the table says kVector, else [n, width].
+template <typename T>
+void EncodeRows(const std::vector<T>& rows, int64_t n, int64_t width, v1::Tensor* out) {
+  static_assert(std::is_same_v<T, float> || std::is_same_v<T, int32_t> || std::is_same_v<T, uint8_t>);
+  const auto set = [&](std::initializer_list<int64_t> shape) {
+    if constexpr (std::is_same_v<T, float>) {
+      SetFloatTensor(shape, rows.data(), out);
+    } else if constexpr (std::is_same_v<T, int32_t>) {
+      SetInt32Tensor(shape, rows.data(), out);
+    } else {
+      SetUint8Tensor(shape, rows.data(), out);
+    }
+  };
+  width == StepResultWidths::kVector ? set({n}) : set({n, width});
 }
 
 // amp_obs as the session asked: the whole history, the newest frame of each row (a strided
