@@ -104,6 +104,12 @@ class ClientTest(unittest.TestCase):
         self.assertEqual(obs_end, spec.obs_size)
         self.assertEqual(action_end, spec.action_size)
         self.assertEqual(spec.self_obs_size + spec.task_obs_size, spec.obs_size)
+        # One proprioceptive slice per body, inside the part's columns, adding up to self_obs_size.
+        for part in spec.parts:
+            self.assertEqual(len(part.self_obs), len(part.bodies), part.name)
+            for s in part.self_obs:
+                self.assertTrue(part.obs.start <= s.start < s.stop <= part.obs.stop, part.name)
+        self.assertEqual(sum(s.stop - s.start for p in spec.parts for s in p.self_obs), spec.self_obs_size)
         self.assertEqual(len(spec.body_names), 24)
         self.assertEqual(sorted(b for p in spec.parts for b in p.bodies), sorted(spec.body_names))
         self.assertEqual(len(spec.joint_names), 69)

@@ -23,13 +23,16 @@ class BodyPart:
     """One body part of a layout.
 
     ``obs`` and ``action`` are Python ``slice`` objects, so ``obs[:, part.obs]`` is this part's
-    observation columns and ``actions[:, part.action]`` its action columns.
+    observation columns and ``actions[:, part.action]`` its action columns. ``self_obs`` holds one
+    slice per body: the part's proprioceptive columns (without the reference features), what a
+    reusable low-level controller reads beside its skill embedding.
     """
 
     name: str
     bodies: Tuple[str, ...]  # in observation order
     obs: slice
     action: slice
+    self_obs: Tuple[slice, ...] = ()
 
     @property
     def obs_size(self) -> int:
@@ -100,6 +103,7 @@ class EnvSpec:
                 bodies=tuple(p.bodies),
                 obs=slice(p.obs.start, p.obs.start + p.obs.size),
                 action=slice(p.action.start, p.action.start + p.action.size),
+                self_obs=tuple(slice(q.start, q.start + q.size) for q in p.self_obs),
             )
             for p in spec.parts)
         return cls(
