@@ -37,18 +37,6 @@ std::vector<float> TensorFloats(const v1::Tensor& tensor) {
   return values;
 }
 
-// The open-loop reference (a zero residual policy): it tracks for a while, then the walk or the
-// run may fail, so both done kinds can show.
-std::string OpenLoopPolicyBytes() {
-  auto catalog = PartLayoutCatalog::LoadDefault(DefaultSpec());
-  auto humanoid = HumanoidModel::Create(DefaultSpec(), PhysicsOptions());
-  PolicySpec spec = PolicySpecForEnv(MakeEnvSpec(**humanoid, *catalog->Get("5part")));
-  spec.action = ActionMapping{ActionMode::kResidual, 0.5};
-  auto bytes = AffinePolicyBytes(spec, {}, {});
-  EXPECT_TRUE(bytes.ok()) << bytes.status();
-  return *bytes;
-}
-
 class RolloutPageTest : public SimulationServerTest {
  protected:
   void SetUp() override {

@@ -116,14 +116,8 @@ TEST_F(SimulationServerTest, RolloutBadInputs) {
 // the checkpoint) and tracks the pose far better than the zero absolute policy, which holds every
 // joint at its range midpoint.
 TEST_F(SimulationServerTest, RolloutRunsAPolicyInItsTrainedActionMode) {
-  auto catalog = PartLayoutCatalog::LoadDefault(DefaultSpec());
-  auto humanoid = HumanoidModel::Create(DefaultSpec(), PhysicsOptions());
-  PolicySpec residual = PolicySpecForEnv(MakeEnvSpec(**humanoid, *catalog->Get("5part")));
-  residual.action = ActionMapping{ActionMode::kResidual, 0.5};
-  auto bytes = AffinePolicyBytes(residual, {}, {});
-  ASSERT_TRUE(bytes.ok()) << bytes.status();
   v1::RolloutRequest request;
-  request.set_checkpoint_bytes(*bytes);
+  request.set_checkpoint_bytes(OpenLoopPolicyBytes());
   request.add_clips("deepmimic_walk");
   auto open_loop = client_->Rollout(request);
   ASSERT_TRUE(open_loop.ok()) << open_loop.status();

@@ -13,6 +13,8 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
+#include "common/policy/policy_checkpoint.h"
+#include "server/core/env/policy_fit.h"
 #include "tests/server_fixture.h"
 
 namespace modskill {
@@ -28,6 +30,18 @@ inline std::string TempDir() {
   const std::string dir = std::string(MODSKILL_TEST_TMP_DIR) + "/server";
   std::filesystem::create_directories(dir);
   return dir;
+}
+
+// The open-loop reference as a policy file: a zero residual policy (PD targets = the reference
+// pose of the next frame), 5 parts, as TorchScript bytes.
+inline std::string OpenLoopPolicyBytes() {
+  auto catalog = PartLayoutCatalog::LoadDefault(DefaultSpec());
+  auto humanoid = HumanoidModel::Create(DefaultSpec(), PhysicsOptions());
+  PolicySpec spec = PolicySpecForEnv(MakeEnvSpec(**humanoid, *catalog->Get("5part")));
+  spec.action = ActionMapping{ActionMode::kResidual, 0.5};
+  auto bytes = AffinePolicyBytes(spec, {}, {});
+  EXPECT_TRUE(bytes.ok()) << bytes.status();
+  return bytes.ok() ? *bytes : std::string();
 }
 
 // Sends a raw request sequence and returns the stream's final status.
