@@ -20,7 +20,6 @@
 #include "absl/strings/str_format.h"
 #include "client/cpp/cli_output.h"
 #include "common/atomic_file.h"
-#include "common/viewer/viewer_html.h"
 #include "common/viewer/viewer_wire.h"
 #include "common/wire/tensor_codec.h"
 
@@ -261,13 +260,9 @@ absl::StatusOr<RolloutViewerRecorder> PageRecorder(SimulationClient& client, con
 }
 
 int WritePage(RolloutViewerRecorder& page, std::string title, const std::string& path) {
-  absl::StatusOr<ViewerScene> scene = page.TakeScene(std::move(title));
-  if (!scene.ok()) return Fail(absl::StrCat("--html: ", scene.status().message()));
-  if (absl::Status status = WriteViewerHtml(path, *scene); !status.ok()) {
-    return Fail(absl::StrCat("--html: ", status.message()));
-  }
-  std::printf("wrote %s: %zu clips, %lld frames\n", path.c_str(), scene->clips.size(),
-              static_cast<long long>(page.num_frames()));
+  absl::StatusOr<size_t> clips = WriteRolloutPage(page, std::move(title), path);
+  if (!clips.ok()) return Fail(absl::StrCat("--html: ", clips.status().message()));
+  std::printf("wrote %s: %zu clips, %lld frames\n", path.c_str(), *clips, static_cast<long long>(page.num_frames()));
   return 0;
 }
 

@@ -165,6 +165,13 @@ absl::StatusOr<ViewerScene> RolloutViewerRecorder::TakeScene(std::string title) 
   return scene;
 }
 
+absl::StatusOr<size_t> WriteRolloutPage(RolloutViewerRecorder& recorder, std::string title, const std::string& path) {
+  absl::StatusOr<ViewerScene> scene = recorder.TakeScene(std::move(title));
+  if (!scene.ok()) return scene.status();
+  if (absl::Status status = WriteViewerHtml(path, *scene); !status.ok()) return status;
+  return scene->clips.size();
+}
+
 absl::StatusOr<RolloutViewerRecorder> PrepareRolloutPage(const v1::EnvSpec& spec,
                                                          const v1::ListMotionsResponse& motions) {
   if (absl::StatusOr<std::string> three_js = LoadThreeJs(); !three_js.ok()) return three_js.status();

@@ -5,6 +5,7 @@
 #ifndef MODSKILL_COMMON_VIEWER_VIEWER_WIRE_H_
 #define MODSKILL_COMMON_VIEWER_VIEWER_WIRE_H_
 
+#include <cstddef>
 #include <map>
 #include <string>
 #include <utility>
@@ -56,6 +57,10 @@ class RolloutViewerRecorder {
   absl::Status error_;
   int64_t num_frames_ = 0;
 };
+
+// Writes the recorder's scene as a page at `path` (WriteViewerHtml: atomic, no partial file);
+// returns the number of clips written.
+absl::StatusOr<size_t> WriteRolloutPage(RolloutViewerRecorder& recorder, std::string title, const std::string& path);
 
 // A recorder for a page of a server's rollout: geometry and frame rate from `spec`, captions from
 // `motions`, and three.js found now (LoadThreeJs) rather than after minutes of rollout.

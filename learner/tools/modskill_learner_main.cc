@@ -26,7 +26,6 @@
 #include "common/atomic_file.h"
 #include "common/log.h"
 #include "common/policy/policy_checkpoint.h"
-#include "common/viewer/viewer_html.h"
 #include "common/viewer/viewer_wire.h"
 #include "learner/evaluation.h"
 #include "learner/tensorboard_writer.h"
@@ -104,12 +103,11 @@ std::optional<RolloutViewerRecorder> EvalPageRecorder(SimulationClient& client, 
 }
 
 void WriteEvalPage(RolloutViewerRecorder& page, std::string title, const std::string& path) {
-  absl::StatusOr<ViewerScene> scene = page.TakeScene(std::move(title));
-  absl::Status status = scene.ok() ? WriteViewerHtml(path, *scene) : scene.status();
-  if (status.ok()) {
-    LogLine("wrote %s (the policy beside its reference, %d clips)", path, static_cast<int>(scene->clips.size()));
+  absl::StatusOr<size_t> clips = WriteRolloutPage(page, std::move(title), path);
+  if (clips.ok()) {
+    LogLine("wrote %s (the policy beside its reference, %d clips)", path, static_cast<int>(*clips));
   } else {
-    LogLine("warning: no eval.html: %s", status.message());
+    LogLine("warning: no eval.html: %s", clips.status().message());
   }
 }
 
