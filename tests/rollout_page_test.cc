@@ -76,6 +76,51 @@ TEST_F(RolloutPageTest, DescribedGeometryIsTheCompiledModels) {
   }
 }
 
+// The page's arrays for one clip equal its streamed frames, value for value; the streamed error
+// is the mean distance of the streamed positions; rotations are unit quaternions.
+void ExpectPageClipEqualsFrames(const nlohmann::json& clip, const std::vector<v1::RolloutFrame>& frames) {
+  const std::string name = clip["name"];
+  const std::vector<float> ref_pos = DecodeFloats(clip["tracks"][0]["pos"]);
+  const std::vector<float> ref_rot = DecodeFloats(clip["tracks"][0]["rot"]);
+  const std::vector<float> sim_pos = DecodeFloats(clip["tracks"][1]["pos"]);
+  const std::vector<float> sim_rot = DecodeFloats(clip["tracks"][1]["rot"]);
+  const std::vector<float> error = DecodeFloats(clip["body_error"]);
+  std::string flags;
+  ASSERT_TRUE(absl::Base64Unescape(clip["flags"].get<std::string>(), &flags));
+  ASSERT_EQ(flags.size(), frames.size());
+  for (size_t f = 0; f < frames.size(); ++f) {
+    const std::pair<const std::vector<float>*, const v1::Tensor*> pairs[4] = {
+        {&ref_pos, &frames[f].ref_body_pos()}, {&ref_rot, &frames[f].ref_body_rot()},
+        {&sim_pos, &frames[f].sim_body_pos()}, {&sim_rot, &frames[f].sim_body_rot()}};
+    for (const auto& [page_values, tensor] : pairs) {
+      const std::vector<float> wire = TensorFloats(*tensor);
+      ASSERT_EQ(page_values->size(), wire.size() * frames.size());
+      for (size_t i = 0; i < wire.size(); ++i) {
+        ASSERT_EQ((*page_values)[f * wire.size() + i], wire[i]) << name << " frame " << f;
+      }
+    }
+    EXPECT_EQ(error[f], frames[f].mean_body_error_m());
+    const bool last = f + 1 == frames.size();
+    EXPECT_EQ(frames[f].done(), last) << name << " frame " << f;
+    EXPECT_EQ((flags[f] & kViewerDone) != 0, last);
+    EXPECT_EQ((flags[f] & kViewerTerminated) != 0, frames[f].terminated());
+  }
+  // The streamed error is the mean distance of the streamed positions.
+  const std::vector<float> sim = TensorFloats(frames.back().sim_body_pos());
+  const std::vector<float> ref = TensorFloats(frames.back().ref_body_pos());
+  double mean = 0;
+  for (size_t b = 0; b < sim.size() / 3; ++b) {
+    mean += std::hypot(sim[3 * b] - ref[3 * b], sim[3 * b + 1] - ref[3 * b + 1], sim[3 * b + 2] - ref[3 * b + 2]);
+  }
+  EXPECT_NEAR(mean / (sim.size() / 3), frames.back().mean_body_error_m(), 1e-4);
+  // A unit quaternion per body.
+  for (size_t q = 0; q + 3 < sim_rot.size(); q += 4) {
+    const double norm = std::sqrt(sim_rot[q] * sim_rot[q] + sim_rot[q + 1] * sim_rot[q + 1] +
+                                  sim_rot[q + 2] * sim_rot[q + 2] + sim_rot[q + 3] * sim_rot[q + 3]);
+    ASSERT_NEAR(norm, 1.0, 1e-4);
+  }
+}
+
 TEST_F(RolloutPageTest, PageFramesEqualTheStreamedFrames) {
   auto spec = client_->Describe();
   auto motions = client_->ListMotions();
@@ -117,45 +162,7 @@ TEST_F(RolloutPageTest, PageFramesEqualTheStreamedFrames) {
     ASSERT_EQ(clip["tracks"].size(), 2u);
     EXPECT_EQ(clip["tracks"][0]["role"], "reference");
     EXPECT_EQ(clip["tracks"][1]["role"], "simulated");
-    const std::vector<float> ref_pos = DecodeFloats(clip["tracks"][0]["pos"]);
-    const std::vector<float> ref_rot = DecodeFloats(clip["tracks"][0]["rot"]);
-    const std::vector<float> sim_pos = DecodeFloats(clip["tracks"][1]["pos"]);
-    const std::vector<float> sim_rot = DecodeFloats(clip["tracks"][1]["rot"]);
-    const std::vector<float> error = DecodeFloats(clip["body_error"]);
-    std::string flags;
-    ASSERT_TRUE(absl::Base64Unescape(clip["flags"].get<std::string>(), &flags));
-    ASSERT_EQ(flags.size(), frames.size());
-    for (size_t f = 0; f < frames.size(); ++f) {
-      const std::pair<const std::vector<float>*, const v1::Tensor*> pairs[4] = {
-          {&ref_pos, &frames[f].ref_body_pos()}, {&ref_rot, &frames[f].ref_body_rot()},
-          {&sim_pos, &frames[f].sim_body_pos()}, {&sim_rot, &frames[f].sim_body_rot()}};
-      for (const auto& [page_values, tensor] : pairs) {
-        const std::vector<float> wire = TensorFloats(*tensor);
-        ASSERT_EQ(page_values->size(), wire.size() * frames.size());
-        for (size_t i = 0; i < wire.size(); ++i) {
-          ASSERT_EQ((*page_values)[f * wire.size() + i], wire[i]) << name << " frame " << f;
-        }
-      }
-      EXPECT_EQ(error[f], frames[f].mean_body_error_m());
-      const bool last = f + 1 == frames.size();
-      EXPECT_EQ(frames[f].done(), last) << name << " frame " << f;
-      EXPECT_EQ((flags[f] & kViewerDone) != 0, last);
-      EXPECT_EQ((flags[f] & kViewerTerminated) != 0, frames[f].terminated());
-    }
-    // The streamed error is the mean distance of the streamed positions.
-    const std::vector<float> sim = TensorFloats(frames.back().sim_body_pos());
-    const std::vector<float> ref = TensorFloats(frames.back().ref_body_pos());
-    double mean = 0;
-    for (size_t b = 0; b < sim.size() / 3; ++b) {
-      mean += std::hypot(sim[3 * b] - ref[3 * b], sim[3 * b + 1] - ref[3 * b + 1], sim[3 * b + 2] - ref[3 * b + 2]);
-    }
-    EXPECT_NEAR(mean / (sim.size() / 3), frames.back().mean_body_error_m(), 1e-4);
-    // A unit quaternion per body.
-    for (size_t q = 0; q + 3 < sim_rot.size(); q += 4) {
-      const double norm = std::sqrt(sim_rot[q] * sim_rot[q] + sim_rot[q + 1] * sim_rot[q + 1] +
-                                    sim_rot[q + 2] * sim_rot[q + 2] + sim_rot[q + 3] * sim_rot[q + 3]);
-      ASSERT_NEAR(norm, 1.0, 1e-4);
-    }
+    ExpectPageClipEqualsFrames(clip, frames);
   }
   // Both clips ran from their first frame.
   EXPECT_EQ(streamed["deepmimic_walk"].front().frame(), 0);
