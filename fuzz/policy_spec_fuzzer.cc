@@ -34,7 +34,8 @@ void FuzzPolicySpec(const uint8_t* data, size_t size) {
   Check(again->part_layout == spec->part_layout && again->obs_size == spec->obs_size &&
             again->action_size == spec->action_size && again->joint_names == spec->joint_names &&
             again->control_dt == spec->control_dt && again->action.mode == spec->action.mode &&
-            again->action.residual_scale == spec->action.residual_scale,
+            again->action.residual_scale == spec->action.residual_scale && again->task == spec->task &&
+            again->controller_input == spec->controller_input,
         "ToJson -> FromJson is the identity");
 
   const ServiceFixture& fixture = Fixture();

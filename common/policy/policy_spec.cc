@@ -1,6 +1,7 @@
 #include "common/policy/policy_spec.h"
 
 #include <cstdint>
+#include <utility>
 
 #include <nlohmann/json.hpp>
 
@@ -18,8 +19,23 @@ std::string PolicySpec::ToJson() const {
   json["control_dt"] = control_dt;
   json["action_mode"] = ActionModeName(action.mode);
   json["residual_scale"] = action.residual_scale;
+  json["task"] = task;
+  json["controller_input"] = controller_input;
   return json.dump(1);
 }
+
+namespace {
+
+// Task names are identifiers the server lists (EnvSpec.tasks); anything else in a file is damage.
+bool IsTaskName(absl::string_view name) {
+  if (name.empty() || name.size() > 32) return false;
+  for (char c : name) {
+    if (!((c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_')) return false;
+  }
+  return true;
+}
+
+}  // namespace
 
 absl::StatusOr<PolicySpec> PolicySpec::FromJson(absl::string_view text) {
   nlohmann::json json = nlohmann::json::parse(text.begin(), text.end(), nullptr, /*allow_exceptions=*/false);
@@ -63,6 +79,24 @@ absl::StatusOr<PolicySpec> PolicySpec::FromJson(absl::string_view text) {
       spec.action.mode = *mode;
     }
     if (json.contains("residual_scale")) spec.action.residual_scale = json.at("residual_scale").get<double>();
+    for (auto [key, field] : {std::pair<const char*, std::string*>{"task", &spec.task},
+                              {"controller_input", &spec.controller_input}}) {
+      if (!json.contains(key)) continue;
+      if (!json.at(key).is_string()) {
+        return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": ", key, ": ",
+                                                       ShownValue(json.at(key).dump()), " is not a string"));
+      }
+      *field = json.at(key).get<std::string>();
+    }
+    if (!IsTaskName(spec.task)) {
+      return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": task: ", ShownValue(spec.task),
+                                                     " is not a task name ([a-z0-9_], 1 to 32 characters)"));
+    }
+    if (spec.controller_input != kPartObsControllerInput && spec.controller_input != kProprioceptionControllerInput) {
+      return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": controller_input: ",
+                                                     ShownValue(spec.controller_input), " is not ",
+                                                     kPartObsControllerInput, " or ", kProprioceptionControllerInput));
+    }
   } catch (const nlohmann::json::exception& e) {
     return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": ", ShownValue(e.what())));
   }

@@ -20,6 +20,12 @@ inline constexpr char kCheckpointSpecFile[] = "modskill/env_spec.json";
 // Largest observation or action vector a policy file may declare (the humanoid's are ~1000).
 inline constexpr int64_t kMaxPolicyVectorSize = 1 << 20;
 
+// The task of a tracker (SessionConfig.task "" or "tracking"), and what its part controllers read
+// beside z when nothing else is recorded (checkpoints from before these fields).
+inline constexpr char kTrackingTask[] = "tracking";
+inline constexpr char kPartObsControllerInput[] = "part_obs";
+inline constexpr char kProprioceptionControllerInput[] = "proprioception";
+
 // The part of the env spec a policy depends on.
 struct PolicySpec {
   std::string part_layout;
@@ -30,10 +36,19 @@ struct PolicySpec {
   // The action mapping it was trained with; checkpoints from before action modes existed
   // were trained in absolute mode.
   ActionMapping action;
+  // The env it drives: "tracking", or a task env ("steer", ...) whose observation is the self
+  // features plus the task's goal (EnvSpec.task).
+  std::string task = kTrackingTask;
+  // What its part controllers read beside z: "part_obs" (the part's whole observation) or
+  // "proprioception" (its bodies' self features only; such controllers can be reused by a task
+  // policy, learner/skill_library.h).
+  std::string controller_input = kPartObsControllerInput;
 
   std::string ToJson() const;
   // INVALID_ARGUMENT naming the field for anything but a JSON object whose sizes lie in
-  // [1, kMaxPolicyVectorSize], control_dt in (0, 10) s and action mapping is valid.
+  // [1, kMaxPolicyVectorSize], control_dt in (0, 10) s, action mapping is valid, task is a
+  // lower-case name ([a-z0-9_], 1 to 32 characters) and controller_input part_obs or
+  // proprioception. Absent task and controller_input read as "tracking" and "part_obs".
   static absl::StatusOr<PolicySpec> FromJson(absl::string_view json);
 };
 

@@ -16,11 +16,16 @@ PolicySpec PolicySpecForEnv(const EnvSpec& spec) {
   return policy;
 }
 
-absl::Status CheckPolicyFitsEnv(const PolicySpec& policy, const EnvSpec& server) {
+absl::Status CheckPolicyFitsEnv(const PolicySpec& policy, const EnvSpec& server, absl::string_view env_task) {
   auto mismatch = [](absl::string_view field, const auto& mine, const auto& theirs) {
     return absl::FailedPreconditionError(absl::StrCat("checkpoint: trained with ", field, " = ", mine,
                                                       ", this server has ", theirs));
   };
+  if (policy.task != env_task) {
+    return absl::FailedPreconditionError(absl::StrCat("checkpoint: a policy for task ", policy.task, ", this env runs ",
+                                                      env_task, " (a task policy runs in a session of its task: ",
+                                                      "modskill-learner --eval --task ", policy.task, ")"));
+  }
   if (policy.part_layout != server.layout.name) return mismatch("part_layout", policy.part_layout, server.layout.name);
   if (policy.obs_size != server.obs_size) return mismatch("obs_size", policy.obs_size, server.obs_size);
   if (policy.action_size != server.action_size) return mismatch("action_size", policy.action_size, server.action_size);

@@ -4,6 +4,7 @@
 #define MODSKILL_SERVER_CORE_ENV_POLICY_FIT_H_
 
 #include "absl/status/status.h"
+#include "absl/strings/string_view.h"
 #include "common/policy/policy_spec.h"
 #include "server/core/env/env_spec.h"
 
@@ -12,8 +13,11 @@ namespace modskill {
 // The env's layout, sizes, joint order and control step; the action mapping left at its default.
 PolicySpec PolicySpecForEnv(const EnvSpec& spec);
 
-// FAILED_PRECONDITION naming the first difference (layout, sizes, control step, joint order).
-absl::Status CheckPolicyFitsEnv(const PolicySpec& policy, const EnvSpec& server);
+// FAILED_PRECONDITION naming the first difference (task, layout, sizes, control step, joint
+// order). `env_task` is the task the env runs (PolicySpec::task; Rollout runs tracking); the task
+// comes first, since a task policy's observation size differs from a tracker's anyway.
+absl::Status CheckPolicyFitsEnv(const PolicySpec& policy, const EnvSpec& server,
+                                absl::string_view env_task = kTrackingTask);
 
 }  // namespace modskill
 
