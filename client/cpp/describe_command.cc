@@ -34,6 +34,12 @@ int Describe(SimulationClient& client, const std::string& part_layout) {
                 part.obs().start(), part.obs().size(), part.action().start(), part.action().size(),
                 absl::StrJoin(part.bodies(), " ").c_str());
   }
+  // Older servers list no tasks.
+  if (spec->tasks_size() > 0) std::printf("tasks (SessionConfig.task; goal floats after the self features):\n");
+  for (const v1::TaskInfo& task : spec->tasks()) {
+    std::printf("  %-12s goal %3d  reward %s\n      %s\n", task.name().c_str(), task.goal_size(),
+                absl::StrJoin(task.reward_terms(), " + ").c_str(), task.description().c_str());
+  }
   return 0;
 }
 

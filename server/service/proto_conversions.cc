@@ -36,7 +36,17 @@ void ToProto(const EnvSpec& spec, const HumanoidModel& humanoid, v1::EnvSpec* ou
   for (const std::string& name : bodies) out->add_body_names(name);
   for (const std::string& name : spec.joint_names) out->add_joint_names(name);
   out->set_control_dt(spec.control_dt);
-  for (int t = 0; t < kNumRewardTerms; ++t) out->add_reward_terms(RewardTermName(t));
+  for (const std::string& term : spec.reward_terms) out->add_reward_terms(term);
+  out->set_task(TaskInfoOf(spec.task).name);
+  out->mutable_goal_obs()->set_start(spec.goal_obs.start);
+  out->mutable_goal_obs()->set_size(spec.goal_obs.size);
+  for (const TaskInfo& task : AllTasks()) {
+    v1::TaskInfo* info = out->add_tasks();
+    info->set_name(task.name);
+    info->set_goal_size(task.goal_size);
+    for (const std::string& term : task.reward_terms) info->add_reward_terms(term);
+    info->set_description(task.description);
+  }
   for (int hinge : spec.action_hinge) {
     out->add_action_offset(static_cast<float>(humanoid.action_offset()[hinge]));
     out->add_action_scale(static_cast<float>(humanoid.action_scale()[hinge]));

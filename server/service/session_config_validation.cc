@@ -48,6 +48,16 @@ absl::StatusOr<ActionMapping> ToActionMapping(v1::ActionMode mode, float residua
   return mapping;
 }
 
+absl::StatusOr<TaskSettings> ToTaskSettings(const v1::TaskSettings& wire) {
+  TaskSettings settings;
+  if (wire.min_speed() != 0) settings.min_speed = wire.min_speed();
+  if (wire.max_speed() != 0) settings.max_speed = wire.max_speed();
+  if (wire.min_goal_interval_s() != 0) settings.min_goal_interval_s = wire.min_goal_interval_s();
+  if (wire.max_goal_interval_s() != 0) settings.max_goal_interval_s = wire.max_goal_interval_s();
+  if (absl::Status status = settings.Validate(); !status.ok()) return status;
+  return settings;
+}
+
 absl::StatusOr<SessionSettings> ParseSessionConfig(const v1::SessionConfig& config, int max_envs_per_session,
                                                    int max_library_clips, const PartLayoutCatalog& layouts) {
   SessionSettings settings;
@@ -70,6 +80,10 @@ absl::StatusOr<SessionSettings> ParseSessionConfig(const v1::SessionConfig& conf
   auto termination_bodies = TerminationBodiesFromWire(config.termination_bodies());
   if (!termination_bodies.ok()) return termination_bodies.status();
   if (!v1::AmpObs_IsValid(config.amp_obs())) return absl::InvalidArgumentError("amp_obs: unknown value");
+  auto task = ParseTask(config.task());
+  if (!task.ok()) return task.status();
+  auto task_settings = ToTaskSettings(config.task_settings());
+  if (!task_settings.ok()) return task_settings.status();
   settings.amp_frames = config.amp_obs() == v1::NEWEST ? 1 : config.amp_obs() == v1::OMIT ? 0 : kAmpHistory;
   if (config.motions_size() > max_library_clips) {
     return absl::InvalidArgumentError(absl::StrCat("motions: ", config.motions_size(),
@@ -85,6 +99,8 @@ absl::StatusOr<SessionSettings> ParseSessionConfig(const v1::SessionConfig& conf
   settings.env.termination_bodies = *termination_bodies;
   settings.env.action = *action_mapping;
   settings.env.max_episode_steps = config.max_episode_steps();
+  settings.env.task = *task;
+  settings.env.task_settings = *task_settings;
   return settings;
 }
 

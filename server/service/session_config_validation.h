@@ -20,15 +20,16 @@ struct SessionSettings {
   int num_envs = 0;
   uint64_t seed = 0;
   PartLayout layout;
-  // termination, termination_distance, termination_bodies, action, max_episode_steps.
+  // termination, termination_distance, termination_bodies, action, max_episode_steps, task and
+  // task_settings.
   TrackingEnvConfig env;
   int amp_frames = 0;  // AMP frames per step result: kAmpHistory, 1 or 0
 };
 
 // The checks in the order the service reports them: num_envs in [1, max_envs_per_session]
 // (above: RESOURCE_EXHAUSTED), max_episode_steps >= 0, the layout (NOT_FOUND), termination,
-// its distance, action mode and residual scale, termination bodies, amp_obs, no more motion names
-// than max_library_clips (INVALID_ARGUMENT). The clip names themselves are left to the library.
+// its distance, action mode and residual scale, termination bodies, amp_obs, the task and its
+// settings, no more motion names than max_library_clips (INVALID_ARGUMENT). The clip names themselves are left to the library.
 absl::StatusOr<SessionSettings> ParseSessionConfig(const v1::SessionConfig& config, int max_envs_per_session,
                                                    int max_library_clips, const PartLayoutCatalog& layouts);
 
@@ -39,6 +40,8 @@ absl::StatusOr<PartLayout> FindLayout(const PartLayoutCatalog& layouts, const st
 absl::StatusOr<TerminationMode> ToTermination(v1::TerminationMode mode, v1::TerminationMode default_mode);
 // 0 means the mode's default (0.5 m in evaluation, 0.25 m otherwise).
 absl::StatusOr<double> ToTerminationDistance(float distance, TerminationMode mode);
+// 0 in a field means its default; then TaskSettings::Validate.
+absl::StatusOr<TaskSettings> ToTaskSettings(const v1::TaskSettings& wire);
 // residual_scale must be 0 outside RESIDUAL; 0 in RESIDUAL means the default scale.
 absl::StatusOr<ActionMapping> ToActionMapping(v1::ActionMode mode, float residual_scale);
 

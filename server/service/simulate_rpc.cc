@@ -109,8 +109,8 @@ absl::StatusOr<std::shared_ptr<SimulationSession>> SimulationService::OpenSessio
                                                      options_.sampling, options_.sampling_floor, options_.generation,
                                                      config.seed());
   registry_.Register(session);
-  LogLine("session %s opened by %s: %d envs, %d clips, layout %s", session->id, session->peer,
-          session->batch->num_envs(), motions->size(), settings->layout.name);
+  LogLine("session %s opened by %s: %d envs, %d clips, layout %s, task %s", session->id, session->peer,
+          session->batch->num_envs(), motions->size(), settings->layout.name, TaskInfoOf(settings->env.task).name);
   session->batch->Reset();
   return session;
 }

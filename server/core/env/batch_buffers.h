@@ -17,7 +17,7 @@ inline StepResultWidths WidthsOf(const EnvSpec& spec) {
   StepResultWidths widths;
   widths.obs = spec.obs_size;
   widths.amp_obs = spec.amp_obs_size;
-  widths.reward_terms = kNumRewardTerms;
+  widths.reward_terms = static_cast<int64_t>(spec.reward_terms.size());
   widths.parts = spec.layout.num_parts();
   return widths;
 }

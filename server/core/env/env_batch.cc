@@ -8,6 +8,27 @@
 #include "server/core/util/seed_mixing.h"
 
 namespace modskill {
+namespace {
+
+// What the envs of a batch share for their task: the bodies termination watches, the VR bodies,
+// the goal tasks' context and the fall check.
+void SetUpTask(EnvContext& context) {
+  const HumanoidSpec& body_spec = context.humanoid->spec();
+  for (const char* name : kVrBodies) context.vr_body_ids.push_back(body_spec.BodyIndex(name));
+  const std::vector<int> feet = FootBodies(body_spec);
+  for (int b = 0; b < context.humanoid->num_bodies(); ++b) {
+    const bool foot = std::find(feet.begin(), feet.end(), b) != feet.end();
+    if (context.config.termination_bodies == TerminationBodies::kAll || !foot) context.termination_body_ids.push_back(b);
+  }
+  // VR tracking fails when the tracked points drift, whatever the rest of the body does.
+  if (context.config.task == TaskKind::kVrTracking) context.termination_body_ids = context.vr_body_ids;
+  context.goal_task.settings = context.config.task_settings;
+  context.goal_task.control_dt = context.spec->control_dt;
+  context.goal_task.right_hand = body_spec.BodyIndex("R_Hand");
+  context.fall_detector = std::make_shared<const FallDetector>(*context.humanoid);
+}
+
+}  // namespace
 
 absl::Status EnvBatch::SetTerminationDistance(double distance) {
   if (absl::Status status = ValidateTerminationDistance(distance); !status.ok()) return status;
@@ -41,6 +62,7 @@ absl::StatusOr<std::unique_ptr<EnvBatch>> EnvBatch::Create(const EnvBatchConfig&
   if (motions == nullptr || motions->size() == 0) return absl::InvalidArgumentError("motions: the library is empty");
   if (absl::Status status = ValidateTerminationDistance(config.env.termination_distance); !status.ok()) return status;
   if (absl::Status status = config.env.action.Validate(); !status.ok()) return status;
+  if (absl::Status status = config.env.task_settings.Validate(); !status.ok()) return status;
   for (int c = 0; c < motions->size(); ++c) {
     if (motions->clip(c).num_bodies != humanoid->num_bodies()) {
       return absl::InvalidArgumentError(absl::StrCat("motions: clip '", motions->clip(c).name, "' has ",
@@ -50,14 +72,10 @@ absl::StatusOr<std::unique_ptr<EnvBatch>> EnvBatch::Create(const EnvBatchConfig&
   }
   std::unique_ptr<EnvBatch> batch(new EnvBatch());
   batch->context_.humanoid = std::move(humanoid);
-  batch->context_.spec = std::make_shared<const EnvSpec>(MakeEnvSpec(*batch->context_.humanoid, layout));
+  batch->context_.spec = std::make_shared<const EnvSpec>(MakeEnvSpec(*batch->context_.humanoid, layout, config.env.task));
   batch->context_.motions = std::move(motions);
   batch->context_.config = config.env;
-  const std::vector<int> feet = FootBodies(batch->context_.humanoid->spec());
-  for (int b = 0; b < batch->context_.humanoid->num_bodies(); ++b) {
-    const bool foot = std::find(feet.begin(), feet.end(), b) != feet.end();
-    if (config.env.termination_bodies == TerminationBodies::kAll || !foot) batch->context_.termination_body_ids.push_back(b);
-  }
+  SetUpTask(batch->context_);
   batch->context_.reference_amp =
       std::make_shared<const ReferenceAmpFrames>(*batch->context_.spec, *batch->context_.motions);
   batch->sampler_ = ClipSampler(batch->context_.motions->size());

@@ -7,10 +7,16 @@ const char* RewardTermName(int term) {
   return term >= 0 && term < kNumRewardTerms ? kNames[term] : "unknown";
 }
 
-EnvSpec MakeEnvSpec(const HumanoidModel& humanoid, const PartLayout& layout) {
+EnvSpec MakeEnvSpec(const HumanoidModel& humanoid, const PartLayout& layout, TaskKind task) {
   const HumanoidSpec& spec = humanoid.spec();
   EnvSpec env;
   env.layout = layout;
+  env.task = task;
+  const TaskInfo& info = TaskInfoOf(task);
+  env.reward_terms = info.reward_terms;
+  // Tracking interleaves each body's reference features with its self features; task envs
+  // append one goal after all the self features.
+  const int per_body_task = task == TaskKind::kTracking ? kTaskFeaturesPerBody : 0;
   env.body_order = layout.BodyOrder();
   env.body_obs_start.assign(spec.num_bodies(), 0);
   const std::vector<std::string> hinge_names = spec.HingeNames();
@@ -20,9 +26,9 @@ EnvSpec MakeEnvSpec(const HumanoidModel& humanoid, const PartLayout& layout) {
     for (int body : part.bodies) {
       env.body_obs_start[body] = obs;
       const int self = body == 0 ? kSelfFeaturesRoot : kSelfFeaturesPerBody;
-      obs += self + kTaskFeaturesPerBody;
+      obs += self + per_body_task;
       env.self_obs_size += self;
-      env.task_obs_size += kTaskFeaturesPerBody;
+      env.task_obs_size += per_body_task;
       if (body != 0) {
         for (int a = 0; a < 3; ++a) {
           const int hinge = 3 * (body - 1) + a;
@@ -37,6 +43,9 @@ EnvSpec MakeEnvSpec(const HumanoidModel& humanoid, const PartLayout& layout) {
     env.part_obs.push_back(obs_slice);
     env.part_action.push_back(action_slice);
   }
+  env.goal_obs = Slice{obs, info.goal_size};
+  obs += info.goal_size;
+  env.task_obs_size += info.goal_size;
   env.obs_size = obs;
   env.action_size = action;
   for (const char* name : kAmpKeyBodies) env.amp_key_bodies.push_back(spec.BodyIndex(name));

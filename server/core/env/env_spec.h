@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "server/core/env/task_catalog.h"
 #include "server/core/sim/humanoid_model.h"
 #include "server/core/sim/part_layout.h"
 
@@ -20,6 +21,8 @@ struct Slice {
 //   self  = [local pos 3 (not for the root), rot 6, vel 3, angvel 3] (+ root height 1 for the root)
 //   task  = [dpos 3, drot 6, dvel 3, dangvel 3, ref local pos 3, ref local rot 6]
 // so a body contributes [self | task]: 15 + 24, the root 13 + 24. Total 358 + 576 = 934.
+// A task env (steer, reach, vr_tracking) writes the self features only, body by body in the same
+// order, and then its goal: [358 | goal].
 inline constexpr int kSelfFeaturesPerBody = 15;
 inline constexpr int kSelfFeaturesRoot = 13;
 inline constexpr int kTaskFeaturesPerBody = 24;
@@ -29,7 +32,8 @@ inline constexpr int kAmpHistory = 10;
 inline const char* const kAmpKeyBodies[] = {"R_Ankle", "L_Ankle", "R_Wrist", "L_Wrist"};
 inline constexpr int kNumAmpKeyBodies = 4;
 
-// Reward terms reported separately; reward = their sum.
+// Tracking's reward terms, reported separately; reward = their sum. Task envs have their own
+// (TaskInfo::reward_terms), energy always last.
 enum RewardTerm { kRewardPos = 0, kRewardRot, kRewardVel, kRewardAngVel, kRewardEnergy, kNumRewardTerms };
 const char* RewardTermName(int term);
 
@@ -41,9 +45,12 @@ struct EnvSpec {
   std::vector<Slice> part_action;   // per part
   std::vector<int> action_hinge;    // per action index: hinge index (MuJoCo order)
   std::vector<int> amp_key_bodies;  // spec body indices
+  TaskKind task = TaskKind::kTracking;
+  Slice goal_obs;                         // task envs: the goal after the self features
+  std::vector<std::string> reward_terms;  // StepResult.reward_terms columns
   int obs_size = 0;
   int self_obs_size = 0;
-  int task_obs_size = 0;
+  int task_obs_size = 0;  // tracking: the reference features; task envs: the goal
   int action_size = 0;
   int amp_obs_per_frame = 0;
   int amp_obs_size = 0;  // kAmpHistory frames, newest first
@@ -52,7 +59,7 @@ struct EnvSpec {
   std::vector<std::string> joint_names;  // hinges in action order
 };
 
-EnvSpec MakeEnvSpec(const HumanoidModel& humanoid, const PartLayout& layout);
+EnvSpec MakeEnvSpec(const HumanoidModel& humanoid, const PartLayout& layout, TaskKind task = TaskKind::kTracking);
 
 }  // namespace modskill
 

@@ -9,40 +9,58 @@ inline void Write3(const Vec3& v, float* out) {
   out[2] = static_cast<float>(v.z());
 }
 
+// Self: where the body is and how it moves, relative to the root and heading. Returns the end.
+float* WriteSelfFeatures(const HumanoidState& sim, int body, const Quat& to_heading, float* o) {
+  const Vec3 root_pos = sim.body_pos[0];
+  if (body == 0) {
+    *o++ = static_cast<float>(root_pos.z());
+  } else {
+    Write3(to_heading * (sim.body_pos[body] - root_pos), o);
+    o += 3;
+  }
+  WriteTanNorm(to_heading * sim.body_rot[body], o);
+  o += 6;
+  Write3(to_heading * sim.body_vel[body], o);
+  o += 3;
+  Write3(to_heading * sim.body_ang_vel[body], o);
+  return o + 3;
+}
+
+// Task: what is left to the reference, and where the reference is.
+void WriteTaskFeatures(const HumanoidState& sim, const HumanoidState& target, int body, const Quat& to_heading,
+                       float* o) {
+  const Vec3 root_pos = sim.body_pos[0];
+  Write3(to_heading * (target.body_pos[body] - sim.body_pos[body]), o);
+  o += 3;
+  const Quat diff = target.body_rot[body] * sim.body_rot[body].conjugate();
+  WriteTanNorm(to_heading * diff * to_heading.conjugate(), o);
+  o += 6;
+  Write3(to_heading * (target.body_vel[body] - sim.body_vel[body]), o);
+  o += 3;
+  Write3(to_heading * (target.body_ang_vel[body] - sim.body_ang_vel[body]), o);
+  o += 3;
+  Write3(to_heading * (target.body_pos[body] - root_pos), o);
+  o += 3;
+  WriteTanNorm(to_heading * target.body_rot[body], o);
+}
+
 }  // namespace
 
+void WriteBodyTaskFeatures(const HumanoidState& sim, const HumanoidState& target, int body, float* out) {
+  WriteTaskFeatures(sim, target, body, InverseHeadingRotation(sim.body_rot[0]), out);
+}
+
 void WriteTrackingObservation(const EnvSpec& spec, const HumanoidState& sim, const HumanoidState& target, float* out) {
-  const Vec3 root_pos = sim.body_pos[0];
   const Quat to_heading = InverseHeadingRotation(sim.body_rot[0]);
   for (int body : spec.body_order) {
-    float* o = out + spec.body_obs_start[body];
-    // Self: where the body is and how it moves, relative to the root and heading.
-    if (body == 0) {
-      *o++ = static_cast<float>(root_pos.z());
-    } else {
-      Write3(to_heading * (sim.body_pos[body] - root_pos), o);
-      o += 3;
-    }
-    WriteTanNorm(to_heading * sim.body_rot[body], o);
-    o += 6;
-    Write3(to_heading * sim.body_vel[body], o);
-    o += 3;
-    Write3(to_heading * sim.body_ang_vel[body], o);
-    o += 3;
-    // Task: what is left to the reference, and where the reference is.
-    Write3(to_heading * (target.body_pos[body] - sim.body_pos[body]), o);
-    o += 3;
-    const Quat diff = target.body_rot[body] * sim.body_rot[body].conjugate();
-    WriteTanNorm(to_heading * diff * to_heading.conjugate(), o);
-    o += 6;
-    Write3(to_heading * (target.body_vel[body] - sim.body_vel[body]), o);
-    o += 3;
-    Write3(to_heading * (target.body_ang_vel[body] - sim.body_ang_vel[body]), o);
-    o += 3;
-    Write3(to_heading * (target.body_pos[body] - root_pos), o);
-    o += 3;
-    WriteTanNorm(to_heading * target.body_rot[body], o);
+    float* task = WriteSelfFeatures(sim, body, to_heading, out + spec.body_obs_start[body]);
+    WriteTaskFeatures(sim, target, body, to_heading, task);
   }
+}
+
+void WriteSelfObservation(const EnvSpec& spec, const HumanoidState& sim, float* out) {
+  const Quat to_heading = InverseHeadingRotation(sim.body_rot[0]);
+  for (int body : spec.body_order) WriteSelfFeatures(sim, body, to_heading, out + spec.body_obs_start[body]);
 }
 
 void WriteAmpFrame(const EnvSpec& spec, const HumanoidState& state, float* out) {

@@ -12,6 +12,14 @@ namespace modskill {
 // `sim` with `target` (the reference at the next control step).
 void WriteTrackingObservation(const EnvSpec& spec, const HumanoidState& sim, const HumanoidState& target, float* out);
 
+// Task envs: writes every body's self features at its place in obs (spec.body_obs_start), the
+// same values WriteTrackingObservation writes there; the goal is the task's to write.
+void WriteSelfObservation(const EnvSpec& spec, const HumanoidState& sim, float* out);
+
+// The kTaskFeaturesPerBody reference features of one body, as tracking observes them (the VR
+// task's goal holds those of the head and the hands).
+void WriteBodyTaskFeatures(const HumanoidState& sim, const HumanoidState& target, int body, float* out);
+
 // Writes spec.amp_obs_per_frame floats describing one frame of `state`.
 void WriteAmpFrame(const EnvSpec& spec, const HumanoidState& state, float* out);
 

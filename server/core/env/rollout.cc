@@ -60,6 +60,14 @@ ClipRolloutMetrics Measure(const Trajectory& t, const std::string& name, bool su
   return m;
 }
 
+// How many steps a rollout of `clip` could last: the step limit, or the clip's length in tracking.
+double PossibleSteps(const RolloutOptions& options, const MotionClip& clip) {
+  const bool goal_task = IsGoalTask(options.task);
+  int steps = goal_task ? kDefaultTaskEpisodeSteps : clip.num_frames - 1;
+  if (options.max_steps_per_clip > 0) steps = goal_task ? options.max_steps_per_clip : std::min(steps, options.max_steps_per_clip);
+  return std::max(1, steps);
+}
+
 }  // namespace
 
 absl::StatusOr<std::vector<ClipRolloutMetrics>> RunRollout(std::shared_ptr<const HumanoidModel> humanoid,
@@ -80,6 +88,9 @@ absl::StatusOr<std::vector<ClipRolloutMetrics>> RunRollout(std::shared_ptr<const
   config.env.action = options.action;
   config.env.max_episode_steps = options.max_steps_per_clip;
   config.env.auto_reset = false;
+  config.env.task = options.task;
+  config.env.task_settings = options.task_settings;
+  config.seed = options.seed;
   config.physics = options.physics;
   auto created = EnvBatch::Create(config, humanoid, layout, motions);
   if (!created.ok()) return created.status();
@@ -107,6 +118,8 @@ absl::StatusOr<std::vector<ClipRolloutMetrics>> RunRollout(std::shared_ptr<const
 
   std::vector<float> actions(static_cast<size_t>(n) * batch.spec().action_size);
   std::vector<bool> finished(n, false);
+  std::vector<double> task_return(n, 0.0);
+  const int64_t terms = batch.buffers().widths.reward_terms;
   int remaining = n;
   while (remaining > 0) {
     if (auto status = policy(batch.buffers().obs.data(), n, actions.data()); !status.ok()) return status;
@@ -116,6 +129,8 @@ absl::StatusOr<std::vector<ClipRolloutMetrics>> RunRollout(std::shared_ptr<const
     for (int i = 0; i < n; ++i) {
       if (finished[i]) continue;
       const bool done = batch.buffers().done[i];
+      // Every column but the last, energy.
+      for (int64_t t = 0; t + 1 < terms; ++t) task_return[i] += batch.buffers().reward_terms[i * terms + t];
       terminated[i] = done && !batch.buffers().truncated[i];
       record(i, done, terminated[i]);
       if (done) {
@@ -127,6 +142,7 @@ absl::StatusOr<std::vector<ClipRolloutMetrics>> RunRollout(std::shared_ptr<const
   std::vector<ClipRolloutMetrics> metrics;
   for (int i = 0; i < n; ++i) {
     metrics.push_back(Measure(trajectories[i], motions->clip(clip_ids[i]).name, !terminated[i], layout));
+    metrics.back().normalized_return = task_return[i] / PossibleSteps(options, motions->clip(clip_ids[i]));
   }
   return metrics;
 }

@@ -19,9 +19,15 @@ struct RolloutOptions {
   TerminationMode termination = TerminationMode::kEvaluation;
   double termination_distance = 0.5;  // m
   ActionMapping action;               // the one the policy was trained with
-  int max_steps_per_clip = 0;         // 0: the clip's length
+  int max_steps_per_clip = 0;         // 0: the clip's length (goal tasks: kDefaultTaskEpisodeSteps)
   int num_threads = 1;
   PhysicsOptions physics;
+  // A task env instead of tracking: each clip gives the start state (and the base pose of
+  // residual actions); its errors are then against that base clip, and normalized_return says
+  // how well the task went.
+  TaskKind task = TaskKind::kTracking;
+  TaskSettings task_settings;
+  uint64_t seed = 0;  // the goals' random stream
 };
 
 // obs: [num_envs, obs_size] -> actions: [num_envs, action_size].
@@ -39,6 +45,10 @@ struct ClipRolloutMetrics {
   std::vector<double> part_error_mm;  // per part of the layout
   // Success at stricter termination distances: the largest mean body error seen (m).
   double worst_mean_body_error = 0;
+  // The task's reward terms but energy, summed over the rollout and divided by the steps it
+  // could have lasted (Table 4's normalized return: 0 worst, 1 best). Tracking: over the clip's
+  // steps.
+  double normalized_return = 0;
 };
 
 // One simulated frame of one clip: the character and its reference (world poses).

@@ -11,7 +11,9 @@
 namespace modskill {
 
 TrackingEnv::TrackingEnv(const EnvContext* context, uint64_t seed)
-    : context_(context), data_(mj_makeData(context->humanoid->model())), pd_(*context->humanoid), rng_(seed) {
+    : context_(context),
+      goal_task_(MakeGoalTask(context->spec->task, &context->goal_task)),
+      data_(mj_makeData(context->humanoid->model())), pd_(*context->humanoid), rng_(seed) {
   const int bodies = context->humanoid->num_bodies(), hinges = context->humanoid->num_hinges();
   sim_.Resize(bodies, hinges);
   reference_.Resize(bodies, hinges);
@@ -41,6 +43,10 @@ void TrackingEnv::ResetTo(int clip, int frame, EnvRow row) {
   episode_steps_ = 0;
   finished_ = false;
   SetSimulationToReference(*context_->humanoid, motion, frame_, data_);
+  if (goal_task_ != nullptr) {
+    ReadSimulatedState(*context_->humanoid, data_, &sim_);
+    goal_task_->Reset(sim_, rng_);
+  }
   // AMP history starts as the reference's own recent past.
   context_->reference_amp->WriteHistory(clip, frame_, amp_history_.data());
   amp_head_ = 0;  // the newest frame sits at amp_head_, older ones at amp_head_ + 1, + 2, ...
@@ -68,57 +74,113 @@ TrackingErrors TrackingEnv::CurrentTrackingTerms(float* terms) {
   return ComputeImitationTerms(context_->config.reward, sim_, reference_, terms, body_distance_.data());
 }
 
+int TrackingEnv::NextFrame() const {
+  const int last = motion_->num_frames - 1;
+  if (goal_task_ != nullptr) return frame_ >= last ? 0 : frame_ + 1;
+  return std::min(frame_ + 1, last);
+}
+
 void TrackingEnv::Step(const float* action, EnvRow row) {
   if (finished_) {
     row.buffers->done[row.index] = 1;
     row.buffers->reward[row.index] = 0.f;
     return;
   }
-  const HumanoidModel& humanoid = *context_->humanoid;
-  const EnvSpec& spec = *context_->spec;
   const TrackingEnvConfig& config = context_->config;
   // Residual actions displace the reference pose of the frame this step reaches.
   const MotionClip& motion = *motion_;
-  const int next_frame = std::min(frame_ + 1, motion.num_frames - 1);
-  MapActionToPdTargets(config.action, humanoid, spec, action,
+  const int next_frame = NextFrame();
+  MapActionToPdTargets(config.action, *context_->humanoid, *context_->spec, action,
                        &motion.dof_pos[static_cast<size_t>(next_frame) * motion.num_hinges()], pd_targets_.data());
   const double power = pd_.Step(pd_targets_.data(), data_);
   ++episode_steps_;
-  ++frame_;
-  const int i = row.index;
-  BatchBuffers& out = *row.buffers;
-  float* terms = &out.reward_terms[static_cast<size_t>(i) * kNumRewardTerms];
-
+  frame_ = goal_task_ != nullptr ? next_frame : frame_ + 1;
   if (PhysicsDiverged()) {
-    // A blow-up ends this episode only; the other envs never see it.
-    ++physics_resets_;
-    std::fill(terms, terms + kNumRewardTerms, 0.f);
-    out.reward[i] = 0.f;
-    out.done[i] = 1;
-    out.truncated[i] = 0;
-    out.ended_clip_id[i] = clip_;
-    out.ended_frame[i] = frame_;
-    out.max_body_error[i] = std::numeric_limits<float>::infinity();
-    out.mean_body_error[i] = std::numeric_limits<float>::infinity();
-    float* part_error = &out.part_error[static_cast<size_t>(i) * out.widths.parts];
-    std::fill(part_error, part_error + out.widths.parts, std::numeric_limits<float>::infinity());
-    EndEpisode(row);
+    EndOnBlowUp(row);
     return;
   }
-  const TrackingErrors errors = CurrentTrackingTerms(terms);
-  terms[kRewardEnergy] = episode_steps_ > config.reward.energy_free_steps
-                             ? static_cast<float>(-config.reward.energy_coefficient * power)
-                             : 0.f;
-  float reward = 0.f;
-  for (int t = 0; t < kNumRewardTerms; ++t) reward += terms[t];
-  out.reward[i] = reward;
+  BatchBuffers& out = *row.buffers;
+  float* terms = &out.reward_terms[static_cast<size_t>(row.index) * out.widths.reward_terms];
+  if (goal_task_ != nullptr) {
+    ScoreGoalTask(terms, row);
+    AddEnergyAndSum(power, terms, row);
+    const int limit = config.max_episode_steps > 0 ? config.max_episode_steps : kDefaultTaskEpisodeSteps;
+    FinishStep(episode_steps_ > 1 && context_->fall_detector->Fallen(data_, sim_), episode_steps_ >= limit, row);
+    return;
+  }
+  const TrackingErrors errors = ScoreTracking(terms, row);
+  AddEnergyAndSum(power, terms, row);
+  FinishStep(Terminated(errors),
+             frame_ >= motion.num_frames - 1 ||
+                 (config.max_episode_steps > 0 && episode_steps_ >= config.max_episode_steps),
+             row);
+}
+
+void TrackingEnv::EndOnBlowUp(EnvRow row) {
+  // A blow-up ends this episode only; the other envs never see it.
+  ++physics_resets_;
+  BatchBuffers& out = *row.buffers;
+  const int i = row.index;
+  float* terms = &out.reward_terms[static_cast<size_t>(i) * out.widths.reward_terms];
+  std::fill(terms, terms + out.widths.reward_terms, 0.f);
+  out.reward[i] = 0.f;
+  out.done[i] = 1;
+  out.truncated[i] = 0;
+  out.ended_clip_id[i] = clip_;
+  out.ended_frame[i] = frame_;
+  out.max_body_error[i] = std::numeric_limits<float>::infinity();
+  out.mean_body_error[i] = std::numeric_limits<float>::infinity();
+  float* part_error = &out.part_error[static_cast<size_t>(i) * out.widths.parts];
+  std::fill(part_error, part_error + out.widths.parts, std::numeric_limits<float>::infinity());
+  EndEpisode(row);
+}
+
+TrackingErrors TrackingEnv::ScoreTracking(float* terms, EnvRow row) {
+  BatchBuffers& out = *row.buffers;
+  const int i = row.index;
+  TrackingErrors errors = CurrentTrackingTerms(terms);
+  if (context_->spec->task == TaskKind::kVrTracking) errors = VrErrors();
   out.max_body_error[i] = static_cast<float>(errors.max_body_distance);
   out.mean_body_error[i] = static_cast<float>(errors.mean_body_distance);
   WritePartErrors(&out.part_error[static_cast<size_t>(i) * out.widths.parts]);
+  return errors;
+}
 
-  const bool terminated = Terminated(errors);
-  const bool truncated = !terminated && (frame_ >= motion.num_frames - 1 ||
-                                         (config.max_episode_steps > 0 && episode_steps_ >= config.max_episode_steps));
+TrackingErrors TrackingEnv::VrErrors() const {
+  TrackingErrors errors;
+  for (int b : context_->vr_body_ids) {
+    errors.max_body_distance = std::max(errors.max_body_distance, body_distance_[b]);
+    errors.mean_body_distance += body_distance_[b] / context_->vr_body_ids.size();
+  }
+  return errors;
+}
+
+void TrackingEnv::ScoreGoalTask(float* terms, EnvRow row) {
+  BatchBuffers& out = *row.buffers;
+  const int i = row.index;
+  ReadSimulatedState(*context_->humanoid, data_, &sim_);
+  goal_task_->Reward(sim_, terms);
+  // No reference to be far from: the errors say nothing in a goal task.
+  out.max_body_error[i] = 0.f;
+  out.mean_body_error[i] = 0.f;
+  float* part_error = &out.part_error[static_cast<size_t>(i) * out.widths.parts];
+  std::fill(part_error, part_error + out.widths.parts, 0.f);
+}
+
+void TrackingEnv::AddEnergyAndSum(double power, float* terms, EnvRow row) const {
+  const ImitationRewardConfig& reward_config = context_->config.reward;
+  const int64_t columns = row.buffers->widths.reward_terms;
+  terms[columns - 1] =
+      episode_steps_ > reward_config.energy_free_steps ? static_cast<float>(-reward_config.energy_coefficient * power) : 0.f;
+  float reward = 0.f;
+  for (int64_t t = 0; t < columns; ++t) reward += terms[t];
+  row.buffers->reward[row.index] = reward;
+}
+
+void TrackingEnv::FinishStep(bool terminated, bool at_end, EnvRow row) {
+  BatchBuffers& out = *row.buffers;
+  const int i = row.index;
+  const bool truncated = !terminated && at_end;
   out.done[i] = terminated || truncated;
   out.truncated[i] = truncated;
   if (terminated || truncated) {
@@ -127,7 +189,9 @@ void TrackingEnv::Step(const float* action, EnvRow row) {
     EndEpisode(row);
     return;
   }
+  if (goal_task_ != nullptr) goal_task_->NextGoal(sim_, rng_);
   // Push the new frame into the AMP ring.
+  const EnvSpec& spec = *context_->spec;
   const int per_frame = spec.amp_obs_per_frame;
   amp_head_ = (amp_head_ + kAmpHistory - 1) % kAmpHistory;
   WriteAmpFrame(spec, sim_, &amp_history_[static_cast<size_t>(amp_head_) * per_frame]);
@@ -175,9 +239,23 @@ void TrackingEnv::WriteObservation(EnvRow row) {
   const MotionClip& motion = *motion_;
   BatchBuffers& out = *row.buffers;
   const int i = row.index;
+  float* obs = &out.obs[static_cast<size_t>(i) * spec.obs_size];
   ReadSimulatedState(*context_->humanoid, data_, &sim_);
-  ReadReferenceState(motion, std::min(frame_ + 1, motion.num_frames - 1), &target_);
-  WriteTrackingObservation(spec, sim_, target_, &out.obs[static_cast<size_t>(i) * spec.obs_size]);
+  if (goal_task_ != nullptr) {
+    WriteSelfObservation(spec, sim_, obs);
+    goal_task_->WriteGoal(sim_, obs + spec.goal_obs.start);
+  } else {
+    ReadReferenceState(motion, std::min(frame_ + 1, motion.num_frames - 1), &target_);
+    if (spec.task == TaskKind::kVrTracking) {
+      WriteSelfObservation(spec, sim_, obs);
+      for (size_t k = 0; k < context_->vr_body_ids.size(); ++k) {
+        WriteBodyTaskFeatures(sim_, target_, context_->vr_body_ids[k],
+                              obs + spec.goal_obs.start + k * kTaskFeaturesPerBody);
+      }
+    } else {
+      WriteTrackingObservation(spec, sim_, target_, obs);
+    }
+  }
   // AMP rows are newest first.
   float* amp = &out.amp_obs[static_cast<size_t>(i) * spec.amp_obs_size];
   const int per_frame = spec.amp_obs_per_frame;

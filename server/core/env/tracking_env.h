@@ -1,5 +1,9 @@
 // One humanoid tracking one reference clip: reference state initialization, PD control,
 // imitation reward, termination, truncation and automatic reset. Writes its row of the batch.
+// With a task (EnvSpec::task) the same humanoid starts from a reference state and then pursues
+// the task: steer and reach reward their goal and end at a fall, VR tracking observes only the
+// head and hands of the reference. The clip keeps playing under a goal task (looping at its end)
+// as the base pose of residual actions.
 #ifndef MODSKILL_SERVER_CORE_ENV_TRACKING_ENV_H_
 #define MODSKILL_SERVER_CORE_ENV_TRACKING_ENV_H_
 
@@ -18,6 +22,8 @@
 #include "server/core/env/action_mapping.h"
 #include "server/core/env/batch_buffers.h"
 #include "server/core/env/env_spec.h"
+#include "server/core/env/fall_detection.h"
+#include "server/core/env/goal_task.h"
 #include "server/core/env/humanoid_state.h"
 #include "server/core/env/imitation_reward.h"
 #include "server/core/env/reference_amp.h"
@@ -39,7 +45,9 @@ struct TrackingEnvConfig {
   TerminationBodies termination_bodies = TerminationBodies::kAll;  // kTraining only
   ActionMapping action;
   ImitationRewardConfig reward;
-  int max_episode_steps = 0;  // 0: until the clip ends
+  int max_episode_steps = 0;  // 0: until the clip ends (goal tasks: kDefaultTaskEpisodeSteps)
+  TaskKind task = TaskKind::kTracking;
+  TaskSettings task_settings;
   bool random_start_frame = true;
   // false: an ended episode keeps its final state and later steps do nothing until the next
   // reset (rollouts and evaluation).
@@ -57,8 +65,12 @@ struct EnvContext {
   const ClipSampler* sampler = nullptr;
   std::shared_ptr<const ReferenceAmpFrames> reference_amp;
   TrackingEnvConfig config;
-  // The bodies training termination watches (config.termination_bodies), spec order.
+  // The bodies training termination watches (config.termination_bodies; VR tracking: the head
+  // and hands), spec order.
   std::vector<int> termination_body_ids;
+  std::vector<int> vr_body_ids;  // kVrBodies, spec indices
+  GoalTaskContext goal_task;
+  std::shared_ptr<const FallDetector> fall_detector;
 };
 
 // Where env i writes in a BatchBuffers.
@@ -98,6 +110,19 @@ class TrackingEnv {
  private:
   void WriteObservation(EnvRow row);
   void EndEpisode(EnvRow row);
+  // The phases of Step after the physics: a blow-up, a tracking step, a goal task's step.
+  void EndOnBlowUp(EnvRow row);
+  TrackingErrors ScoreTracking(float* terms, EnvRow row);
+  void ScoreGoalTask(float* terms, EnvRow row);
+  // The energy term (last column) and the reward, their sum.
+  void AddEnergyAndSum(double power, float* terms, EnvRow row) const;
+  // Books the episode's end if `terminated` or the step limit (or the clip's end) is reached;
+  // otherwise pushes the AMP frame and writes the next observation.
+  void FinishStep(bool terminated, bool at_end, EnvRow row);
+  // The reference frame the next step reaches: tracking stops at the clip's end, goal tasks loop.
+  int NextFrame() const;
+  // Errors over the VR bodies only (VR tracking's success and errors).
+  TrackingErrors VrErrors() const;
   // Mean body distance per part of the layout between sim_ and reference_ (one float per part).
   void WritePartErrors(float* part_error) const;
   bool PhysicsDiverged() const;
@@ -105,6 +130,7 @@ class TrackingEnv {
   bool Terminated(const TrackingErrors& errors) const;
 
   const EnvContext* context_;
+  std::unique_ptr<GoalTask> goal_task_;  // steer, reach; nullptr otherwise
   mjData* data_;
   PdController pd_;
   std::mt19937_64 rng_;

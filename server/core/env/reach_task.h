@@ -1,0 +1,31 @@
+// Reach (ModSkill Table 4): bring the right hand to a target point drawn in a 2 m box centred at
+// (0, 0, 1) m in the heading frame; a new point at random intervals.
+#ifndef MODSKILL_SERVER_CORE_ENV_REACH_TASK_H_
+#define MODSKILL_SERVER_CORE_ENV_REACH_TASK_H_
+
+#include "server/core/env/goal_task.h"
+
+namespace modskill {
+
+class ReachTask : public GoalTask {
+ public:
+  explicit ReachTask(const GoalTaskContext* context) : GoalTask(context) {}
+
+  void Reset(const HumanoidState& sim, std::mt19937_64& rng) override { StartGoal(sim, rng); }
+  // reach = exp(-5 |p_R_Hand - c|^2)
+  void Reward(const HumanoidState& sim, float* terms) override;
+  // c - p_root in the heading frame (m).
+  void WriteGoal(const HumanoidState& sim, float* goal) const override;
+
+  Vec3 target() const { return target_; }  // world (m), for tests
+
+ protected:
+  void DrawGoal(const HumanoidState& sim, std::mt19937_64& rng) override;
+
+ private:
+  Vec3 target_ = Vec3::Zero();
+};
+
+}  // namespace modskill
+
+#endif  // MODSKILL_SERVER_CORE_ENV_REACH_TASK_H_

@@ -1,0 +1,58 @@
+// The tasks a session may run (SessionConfig.task): tracking, and the downstream task envs that
+// reuse learned skills (ModSkill section 3.5, docs/DESIGN.md "Downstream"). Each task's goal
+// size, reward terms and settings live here, once; Describe lists them and the env spec is sized
+// from them.
+#ifndef MODSKILL_SERVER_CORE_ENV_TASK_CATALOG_H_
+#define MODSKILL_SERVER_CORE_ENV_TASK_CATALOG_H_
+
+#include <string>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "absl/strings/string_view.h"
+
+namespace modskill {
+
+enum class TaskKind { kTracking, kSteer, kReach, kVrTracking };
+
+struct TaskInfo {
+  TaskKind kind;
+  const char* name;
+  int goal_size;                          // goal features after the self features (0: tracking)
+  std::vector<std::string> reward_terms;  // reward = their sum; "energy" always last
+  const char* description;
+};
+
+// Every task, tracking first.
+const std::vector<TaskInfo>& AllTasks();
+const TaskInfo& TaskInfoOf(TaskKind kind);
+// "" and "tracking" are tracking; INVALID_ARGUMENT naming the value and the known tasks otherwise.
+absl::StatusOr<TaskKind> ParseTask(absl::string_view name);
+
+// Steer and reach pursue a goal of their own after the start state (GoalTask); tracking and VR
+// tracking follow the clip.
+inline bool IsGoalTask(TaskKind kind) { return kind == TaskKind::kSteer || kind == TaskKind::kReach; }
+
+// The goal features of the VR task, per watched body: the tracking task features of that body.
+inline constexpr const char* kVrBodies[] = {"Head", "L_Hand", "R_Hand"};
+inline constexpr int kNumVrBodies = 3;
+
+// Steer's and reach's goals (SessionConfig.task_settings); 0 in a wire field means its default.
+struct TaskSettings {
+  double min_speed = 0.5;  // steer: target speed range (m/s)
+  double max_speed = 3.0;
+  double min_goal_interval_s = 2.0;  // steer, reach: a new goal after U(min, max) seconds
+  double max_goal_interval_s = 5.0;
+  // INVALID_ARGUMENT naming the field: speeds finite with 0 <= min <= max <= 10, intervals
+  // finite with 0 < min <= max <= 3600.
+  absl::Status Validate() const;
+};
+
+// Steps a task episode lasts at most when the session leaves max_episode_steps at 0 (10 s at
+// 30 Hz); tracking and VR tracking run to the clip's end instead.
+inline constexpr int kDefaultTaskEpisodeSteps = 300;
+
+}  // namespace modskill
+
+#endif  // MODSKILL_SERVER_CORE_ENV_TASK_CATALOG_H_

@@ -1,0 +1,277 @@
+// The task envs (steer, reach, VR tracking): their observation layout, goals, rewards, falls and
+// bad settings, without a server.
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "server/core/env/fall_detection.h"
+#include "server/core/env/observation.h"
+#include "server/core/env/reach_task.h"
+#include "server/core/env/steer_task.h"
+#include "tests/test_fixtures.h"
+
+namespace modskill {
+namespace {
+
+EnvBatchConfig TaskConfig(TaskKind task, int envs = 4) {
+  EnvBatchConfig config;
+  config.num_envs = envs;
+  config.seed = 5;
+  config.env.task = task;
+  config.env.action.mode = ActionMode::kResidual;
+  return config;
+}
+
+int ClipIndex(const char* name) {
+  const int index = DefaultMotions()->Find(name);
+  EXPECT_GE(index, 0) << name;
+  return std::max(index, 0);
+}
+
+TEST(TaskSpecTest, TaskObservationIsTheSelfFeaturesThenTheGoal) {
+  for (const TaskInfo& task : AllTasks()) {
+    auto batch = MakeBatch(TaskConfig(task.kind));
+    ASSERT_NE(batch, nullptr) << task.name;
+    const EnvSpec& spec = batch->spec();
+    EXPECT_EQ(spec.reward_terms, task.reward_terms) << task.name;
+    EXPECT_EQ(spec.reward_terms.back(), "energy");
+    EXPECT_EQ(batch->buffers().widths.reward_terms, static_cast<int64_t>(task.reward_terms.size()));
+    EXPECT_EQ(spec.self_obs_size, 358) << task.name;
+    EXPECT_EQ(spec.action_size, 69);
+    if (task.kind == TaskKind::kTracking) {
+      EXPECT_EQ(spec.obs_size, 934);
+      EXPECT_EQ(spec.goal_obs.size, 0);
+      continue;
+    }
+    EXPECT_EQ(spec.goal_obs.start, 358) << task.name;
+    EXPECT_EQ(spec.goal_obs.size, task.goal_size) << task.name;
+    EXPECT_EQ(spec.task_obs_size, task.goal_size);
+    EXPECT_EQ(spec.obs_size, 358 + task.goal_size);
+    int end = 0;
+    for (const Slice& part : spec.part_obs) {
+      EXPECT_EQ(part.start, end) << task.name;
+      end += part.size;
+    }
+    EXPECT_EQ(end, 358) << task.name << ": the parts tile the self features";
+  }
+  EXPECT_EQ(TaskInfoOf(TaskKind::kSteer).goal_size, 3);
+  EXPECT_EQ(TaskInfoOf(TaskKind::kReach).goal_size, 3);
+  EXPECT_EQ(TaskInfoOf(TaskKind::kVrTracking).goal_size, 72);
+}
+
+// A task env's self features are the tracking observation's self features of the same state, so
+// the tracker's frozen part controllers read what they were trained on.
+TEST(TaskSpecTest, SelfFeaturesEqualTrackingsAndVrGoalIsTrackingsTaskFeatures) {
+  auto tracking = MakeBatch(TaskConfig(TaskKind::kTracking, 1));
+  auto steer = MakeBatch(TaskConfig(TaskKind::kSteer, 1));
+  auto vr = MakeBatch(TaskConfig(TaskKind::kVrTracking, 1));
+  ASSERT_TRUE(tracking && steer && vr);
+  const int walk = ClipIndex("deepmimic_walk");
+  for (EnvBatch* batch : {tracking.get(), steer.get(), vr.get()}) batch->env(0).ResetTo(walk, 7, batch->row(0));
+  const std::vector<float> zeros(69, 0.f);
+  for (int step = 0; step < 3; ++step) {
+    for (EnvBatch* batch : {tracking.get(), steer.get(), vr.get()}) ASSERT_TRUE(batch->Step(zeros).ok());
+  }
+  const EnvSpec& t = tracking->spec();
+  for (EnvBatch* batch : {steer.get(), vr.get()}) {
+    const EnvSpec& s = batch->spec();
+    for (int body = 0; body < 24; ++body) {
+      const int size = body == 0 ? kSelfFeaturesRoot : kSelfFeaturesPerBody;
+      for (int k = 0; k < size; ++k) {
+        ASSERT_EQ(batch->buffers().obs[s.body_obs_start[body] + k], tracking->buffers().obs[t.body_obs_start[body] + k])
+            << "body " << body << " feature " << k;
+      }
+    }
+  }
+  const EnvSpec& v = vr->spec();
+  for (int k = 0; k < kNumVrBodies; ++k) {
+    const int body = DefaultSpec().BodyIndex(kVrBodies[k]);
+    const int self = body == 0 ? kSelfFeaturesRoot : kSelfFeaturesPerBody;
+    for (int f = 0; f < kTaskFeaturesPerBody; ++f) {
+      ASSERT_EQ(vr->buffers().obs[v.goal_obs.start + k * kTaskFeaturesPerBody + f],
+                tracking->buffers().obs[t.body_obs_start[body] + self + f])
+          << kVrBodies[k] << " feature " << f;
+    }
+  }
+}
+
+HumanoidState StandingState() {
+  HumanoidState state;
+  state.Resize(24, 69);
+  ReadReferenceState(DefaultMotions()->clip(ClipIndex("deepmimic_walk")), 0, &state);
+  return state;
+}
+
+TEST(SteerTaskTest, MovingAlongTheTargetAtItsSpeedWhileFacingItEarnsOne) {
+  GoalTaskContext context;
+  context.control_dt = 1.0 / 30;
+  SteerTask steer(&context);
+  std::mt19937_64 rng(11);
+  HumanoidState state = StandingState();
+  steer.Reset(state, rng);
+  const Vec3 d = steer.direction();
+  EXPECT_NEAR(d.norm(), 1.0, 1e-12);
+  EXPECT_EQ(d.z(), 0);
+  EXPECT_GE(steer.speed(), 0.5);
+  EXPECT_LE(steer.speed(), 3.0);
+  // Face the target: yaw the root onto d, then move along d at the target speed for one step.
+  state.body_rot[0] = Quat(Eigen::AngleAxisd(std::atan2(d.y(), d.x()), Vec3::UnitZ()));
+  state.body_pos[0] += d * steer.speed() * context.control_dt;
+  float terms[2];
+  steer.Reward(state, terms);
+  EXPECT_NEAR(terms[0], 0.7, 1e-6);
+  EXPECT_NEAR(terms[1], 0.3, 1e-6);
+  // The goal in the heading frame is straight ahead.
+  float goal[3];
+  steer.WriteGoal(state, goal);
+  EXPECT_NEAR(goal[0], 1.0, 1e-6);
+  EXPECT_NEAR(goal[1], 0.0, 1e-6);
+  EXPECT_FLOAT_EQ(goal[2], static_cast<float>(steer.speed()));
+  // Standing still facing away: the speed error alone, no facing reward.
+  state.body_rot[0] = Quat(Eigen::AngleAxisd(std::atan2(-d.y(), -d.x()), Vec3::UnitZ()));
+  steer.Reward(state, terms);
+  EXPECT_NEAR(terms[0], 0.7 * std::exp(-0.25 * steer.speed() * steer.speed()), 1e-6);
+  EXPECT_NEAR(terms[1], 0.0, 1e-6);
+}
+
+TEST(SteerTaskTest, GoalsChangeAtTheSettingsInterval) {
+  GoalTaskContext context;
+  context.control_dt = 1.0 / 30;
+  context.settings.min_goal_interval_s = context.settings.max_goal_interval_s = 0.1;  // 3 steps
+  SteerTask steer(&context);
+  std::mt19937_64 rng(3);
+  const HumanoidState state = StandingState();
+  steer.Reset(state, rng);
+  const Vec3 first = steer.direction();
+  steer.NextGoal(state, rng);
+  steer.NextGoal(state, rng);
+  EXPECT_EQ(steer.direction(), first);
+  steer.NextGoal(state, rng);
+  EXPECT_NE(steer.direction(), first);
+}
+
+TEST(ReachTaskTest, TargetsLieInTheBoxAndTheHandAtTheTargetEarnsOne) {
+  GoalTaskContext context;
+  context.control_dt = 1.0 / 30;
+  context.right_hand = DefaultSpec().BodyIndex("R_Hand");
+  ReachTask reach(&context);
+  std::mt19937_64 rng(4);
+  HumanoidState state = StandingState();
+  const Quat to_heading = InverseHeadingRotation(state.body_rot[0]);
+  for (int draw = 0; draw < 50; ++draw) {
+    reach.Reset(state, rng);
+    Vec3 local = to_heading * (reach.target() - Vec3(state.body_pos[0].x(), state.body_pos[0].y(), 0));
+    EXPECT_LE(std::abs(local.x()), 1.0 + 1e-9);
+    EXPECT_LE(std::abs(local.y()), 1.0 + 1e-9);
+    EXPECT_GE(local.z(), 0.0);
+    EXPECT_LE(local.z(), 2.0);
+    float goal[3];
+    reach.WriteGoal(state, goal);
+    const Vec3 expected = to_heading * (reach.target() - state.body_pos[0]);
+    EXPECT_NEAR(goal[2], expected.z(), 1e-5);
+  }
+  float terms[1];
+  state.body_pos[context.right_hand] = reach.target();
+  reach.Reward(state, terms);
+  EXPECT_FLOAT_EQ(terms[0], 1.f);
+  state.body_pos[context.right_hand] = reach.target() + Vec3(0, 0, 1);
+  reach.Reward(state, terms);
+  EXPECT_NEAR(terms[0], std::exp(-5.0), 1e-7);
+}
+
+TEST(FallDetectionTest, StandingIsNoFallLyingIs) {
+  auto batch = MakeBatch(TaskConfig(TaskKind::kSteer, 1));
+  ASSERT_NE(batch, nullptr);
+  FallDetector detector(batch->humanoid());
+  TrackingEnv& env = batch->env(0);
+  env.ResetTo(ClipIndex("deepmimic_walk"), 0, batch->row(0));
+  mjData* data = env.mutable_data();
+  const mjModel* model = batch->humanoid().model();
+  mj_forward(model, data);
+  HumanoidState state;
+  state.Resize(24, 69);
+  ReadSimulatedState(batch->humanoid(), data, &state);
+  EXPECT_FALSE(detector.Fallen(data, state));
+  // Lying on the back, 0.1 m above the floor: the torso touches it and the root is low.
+  data->qpos[2] = 0.12;
+  const Quat lying(Eigen::AngleAxisd(M_PI / 2, Vec3::UnitY()));
+  data->qpos[3] = lying.w();
+  data->qpos[4] = lying.x();
+  data->qpos[5] = lying.y();
+  data->qpos[6] = lying.z();
+  mj_forward(model, data);
+  ReadSimulatedState(batch->humanoid(), data, &state);
+  EXPECT_TRUE(detector.Fallen(data, state));
+}
+
+// A limp humanoid (absolute mode, all targets at the offsets, which is not a standing pose)
+// falls; its episode ends as a failure, not a truncation, and the row restarts.
+TEST(TaskEnvTest, StepsFallAndTruncate) {
+  EnvBatchConfig config = TaskConfig(TaskKind::kSteer, 4);
+  config.env.max_episode_steps = 400;
+  config.env.action.mode = ActionMode::kAbsolute;
+  auto limp = MakeBatch(config);
+  ASSERT_NE(limp, nullptr);
+  limp->Reset();
+  const std::vector<float> zeros(4 * 69, 0.f);
+  int falls = 0, truncations = 0;
+  for (int step = 0; step < 150; ++step) {
+    ASSERT_TRUE(limp->Step(zeros).ok());
+    for (int i = 0; i < 4; ++i) {
+      falls += limp->buffers().done[i] && !limp->buffers().truncated[i];
+      truncations += limp->buffers().truncated[i];
+      const float* terms = &limp->buffers().reward_terms[i * 3];
+      EXPECT_GE(terms[0], 0.f);
+      EXPECT_LE(terms[0] + terms[1], 1.f + 1e-6f);
+      EXPECT_NEAR(limp->buffers().reward[i], terms[0] + terms[1] + terms[2], 1e-5);
+    }
+  }
+  EXPECT_GT(falls, 0);
+  EXPECT_EQ(truncations, 0);
+  // With a step limit of 2, walking open loop, every episode is truncated at step 2.
+  config.env.max_episode_steps = 2;
+  config.env.action.mode = ActionMode::kResidual;
+  auto walk = DefaultMotions()->Subset({"deepmimic_walk"});
+  ASSERT_TRUE(walk.ok());
+  auto short_episodes = MakeBatch(config, std::make_shared<const MotionLibrary>(*std::move(walk)));
+  ASSERT_NE(short_episodes, nullptr);
+  short_episodes->Reset();
+  ASSERT_TRUE(short_episodes->Step(zeros).ok());
+  for (int i = 0; i < 4; ++i) EXPECT_FALSE(short_episodes->buffers().done[i]);
+  ASSERT_TRUE(short_episodes->Step(zeros).ok());
+  for (int i = 0; i < 4; ++i) EXPECT_TRUE(short_episodes->buffers().done[i] && short_episodes->buffers().truncated[i]);
+}
+
+TEST(TaskSettingsTest, OutOfRangeSettingsNameTheField) {
+  struct Case {
+    TaskSettings settings;
+    const char* field;
+  };
+  TaskSettings speed, inverted, interval, long_interval, nan;
+  speed.min_speed = -1;
+  inverted.max_speed = 0.1;
+  interval.min_goal_interval_s = 0;
+  long_interval.max_goal_interval_s = 4000;
+  nan.max_speed = std::nan("");
+  for (const Case& c : {Case{speed, "min_speed"}, Case{inverted, "max_speed"}, Case{interval, "min_goal_interval_s"},
+                        Case{long_interval, "max_goal_interval_s"}, Case{nan, "max_speed"}}) {
+    const absl::Status status = c.settings.Validate();
+    EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument) << c.field;
+    EXPECT_NE(status.message().find(c.field), std::string::npos) << status;
+  }
+  EXPECT_TRUE(TaskSettings().Validate().ok());
+  auto unknown = ParseTask("sterr");
+  ASSERT_FALSE(unknown.ok());
+  EXPECT_NE(unknown.status().message().find("sterr"), std::string::npos);
+  EXPECT_NE(unknown.status().message().find("steer"), std::string::npos);
+  EnvBatchConfig config = TaskConfig(TaskKind::kReach, 1);
+  config.env.task_settings.min_speed = 20;
+  auto batch = EnvBatch::Create(config, DefaultMotions());
+  ASSERT_FALSE(batch.ok());
+  EXPECT_NE(batch.status().message().find("min_speed"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace modskill

@@ -1,0 +1,122 @@
+// Task sessions over gRPC: Describe lists the tasks, a session runs one (its spec, goal and
+// reward terms equal the in-process env's), and bad task names or settings are refused naming
+// the field.
+#include <gmock/gmock.h>
+
+#include "common/wire/tensor_codec.h"
+#include "tests/server_fixture.h"
+#include "tests/simulation_server_fixture.h"
+
+namespace modskill {
+namespace {
+
+using ::testing::ElementsAre;
+using ::testing::HasSubstr;
+
+TEST_F(SimulationServerTest, DescribeListsTheTasks) {
+  auto spec = client_->Describe();
+  ASSERT_TRUE(spec.ok()) << spec.status();
+  EXPECT_EQ(spec->task(), "tracking");
+  EXPECT_EQ(spec->goal_obs().size(), 0);
+  std::vector<std::string> names;
+  for (const v1::TaskInfo& task : spec->tasks()) {
+    names.push_back(task.name());
+    EXPECT_FALSE(task.description().empty()) << task.name();
+    EXPECT_EQ(task.reward_terms(task.reward_terms_size() - 1), "energy") << task.name();
+  }
+  EXPECT_THAT(names, ElementsAre("tracking", "steer", "reach", "vr_tracking"));
+  EXPECT_EQ(spec->tasks(1).goal_size(), 3);
+  EXPECT_THAT(spec->tasks(1).reward_terms(), ElementsAre("speed", "facing", "energy"));
+  EXPECT_EQ(spec->tasks(3).goal_size(), 72);
+}
+
+TEST_F(SimulationServerTest, SteerSessionEqualsTheInProcessTaskEnv) {
+  v1::SessionConfig config = Config(3, 21);
+  config.set_task("steer");
+  config.set_action_mode(v1::RESIDUAL);
+  config.add_motions("deepmimic_walk");
+  config.mutable_task_settings()->set_min_speed(1.0f);
+  config.mutable_task_settings()->set_max_speed(1.5f);
+  auto stream = client_->OpenSession(config);
+  ASSERT_TRUE(stream.ok()) << stream.status();
+  const v1::EnvSpec& spec = (*stream)->opened().spec();
+  EXPECT_EQ(spec.task(), "steer");
+  EXPECT_EQ(spec.obs_size(), 361);
+  EXPECT_EQ(spec.goal_obs().start(), 358);
+  EXPECT_EQ(spec.goal_obs().size(), 3);
+  EXPECT_THAT(spec.reward_terms(), ElementsAre("speed", "facing", "energy"));
+  // The parts' self slices point at the same features as in tracking, in task coordinates.
+  EXPECT_EQ(spec.parts(0).self_obs(0).start(), 0);
+  EXPECT_EQ(spec.parts(0).obs().size(), spec.parts(0).self_obs_size() * 15);
+
+  EnvBatchConfig local_config;
+  local_config.num_envs = 3;
+  local_config.seed = 21;
+  local_config.env.task = TaskKind::kSteer;
+  local_config.env.action.mode = ActionMode::kResidual;
+  local_config.env.task_settings.min_speed = 1.0;
+  local_config.env.task_settings.max_speed = 1.5;
+  auto subset = DefaultMotions()->Subset({"deepmimic_walk"});
+  ASSERT_TRUE(subset.ok());
+  auto local = MakeBatch(local_config, std::make_shared<const MotionLibrary>(*std::move(subset)));
+  ASSERT_NE(local, nullptr);
+  local->Reset();
+  std::vector<float> obs;
+  ASSERT_TRUE(ReadFloatTensor((*stream)->opened().initial().obs(), "obs", &obs).ok());
+  ASSERT_EQ(obs, local->buffers().obs);
+  for (int i = 0; i < 3; ++i) {
+    const float speed = obs[i * 361 + 360];
+    EXPECT_GE(speed, 1.0f);
+    EXPECT_LE(speed, 1.5f);
+  }
+  const std::vector<float> actions(3 * 69, 0.f);
+  for (int s = 0; s < 8; ++s) {
+    ASSERT_TRUE(local->Step(actions).ok());
+    ASSERT_TRUE((*stream)->Step(actions.data()).ok());
+    const v1::StepResult& result = (*stream)->result();
+    std::vector<float> remote;
+    ASSERT_TRUE(ReadFloatTensor(result.obs(), "obs", &remote).ok());
+    ASSERT_EQ(remote, local->buffers().obs) << s;
+    ASSERT_TRUE(ReadFloatTensor(result.reward_terms(), "reward_terms", &remote).ok());
+    ASSERT_EQ(remote, local->buffers().reward_terms) << s;
+    EXPECT_EQ(result.reward_terms().shape(1), 3);
+  }
+  EXPECT_TRUE((*stream)->Close().ok());
+}
+
+TEST_F(SimulationServerTest, BadTasksAreRejectedNamingTheField) {
+  struct Case {
+    v1::SessionConfig config;
+    std::string message;
+  };
+  std::vector<Case> cases;
+  v1::SessionConfig config = Config(2);
+  config.set_task("strik");
+  cases.push_back({config, "task: unknown task 'strik'"});
+  config = Config(2);
+  config.set_task("steer");
+  config.mutable_task_settings()->set_min_speed(-2.f);
+  cases.push_back({config, "task_settings.min_speed"});
+  config.mutable_task_settings()->set_min_speed(2.f);
+  config.mutable_task_settings()->set_max_speed(1.f);
+  cases.push_back({config, "task_settings.max_speed"});
+  config = Config(2);
+  config.set_task("reach");
+  config.mutable_task_settings()->set_max_goal_interval_s(std::nanf(""));
+  cases.push_back({config, "task_settings.max_goal_interval_s"});
+  for (const Case& c : cases) {
+    auto stream = client_->OpenSession(c.config);
+    ASSERT_FALSE(stream.ok()) << c.message;
+    EXPECT_EQ(stream.status().code(), absl::StatusCode::kInvalidArgument) << stream.status();
+    EXPECT_THAT(std::string(stream.status().message()), HasSubstr(c.message));
+  }
+  // The server still serves.
+  config = Config(2);
+  config.set_task("vr_tracking");
+  auto vr = client_->OpenSession(config);
+  ASSERT_TRUE(vr.ok()) << vr.status();
+  EXPECT_EQ((*vr)->opened().spec().obs_size(), 358 + 72);
+}
+
+}  // namespace
+}  // namespace modskill
