@@ -33,11 +33,12 @@ inline std::string TempDir() {
 }
 
 // The open-loop reference as a policy file: a zero residual policy (PD targets = the reference
-// pose of the next frame), 5 parts, as TorchScript bytes.
-inline std::string OpenLoopPolicyBytes() {
+// pose of the next frame), 5 parts, as TorchScript bytes; for `task`'s observation.
+inline std::string OpenLoopPolicyBytes(TaskKind task = TaskKind::kTracking) {
   auto catalog = PartLayoutCatalog::LoadDefault(DefaultSpec());
   auto humanoid = HumanoidModel::Create(DefaultSpec(), PhysicsOptions());
-  PolicySpec spec = PolicySpecForEnv(MakeEnvSpec(**humanoid, *catalog->Get("5part")));
+  PolicySpec spec = PolicySpecForEnv(MakeEnvSpec(**humanoid, *catalog->Get("5part"), task));
+  spec.task = TaskInfoOf(task).name;
   spec.action = ActionMapping{ActionMode::kResidual, 0.5};
   auto bytes = AffinePolicyBytes(spec, {}, {});
   EXPECT_TRUE(bytes.ok()) << bytes.status();

@@ -136,6 +136,22 @@ TEST(SteerTaskTest, MovingAlongTheTargetAtItsSpeedWhileFacingItEarnsOne) {
   EXPECT_NEAR(terms[1], 0.0, 1e-6);
 }
 
+// The facing term takes the root's x axis as forward: the reference walk and run move that way.
+TEST(SteerTaskTest, LocomotionClipsMoveAlongTheFacingAxis) {
+  for (const char* name : {"deepmimic_walk", "deepmimic_run", "deepmimic_jog"}) {
+    const MotionClip& clip = DefaultMotions()->clip(ClipIndex(name));
+    HumanoidState a, b;
+    a.Resize(24, 69);
+    b.Resize(24, 69);
+    ReadReferenceState(clip, 0, &a);
+    ReadReferenceState(clip, clip.num_frames - 1, &b);
+    Vec3 travel = b.body_pos[0] - a.body_pos[0];
+    travel.z() = 0;
+    const Vec3 facing = HeadingRotation(a.body_rot[0]) * Vec3::UnitX();
+    EXPECT_GT(facing.dot(travel.normalized()), 0.8) << name;
+  }
+}
+
 TEST(SteerTaskTest, GoalsChangeAtTheSettingsInterval) {
   GoalTaskContext context;
   context.control_dt = 1.0 / 30;

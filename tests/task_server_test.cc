@@ -118,5 +118,51 @@ TEST_F(SimulationServerTest, BadTasksAreRejectedNamingTheField) {
   EXPECT_EQ((*vr)->opened().spec().obs_size(), 358 + 72);
 }
 
+// Rollout runs a policy in the task it was trained for and reports the normalized return; a
+// request for another task is refused naming it.
+TEST_F(SimulationServerTest, RolloutRunsATaskPolicyInItsTask) {
+  v1::RolloutRequest request;
+  request.set_checkpoint_bytes(OpenLoopPolicyBytes(TaskKind::kSteer));
+  request.add_clips("deepmimic_walk");
+  request.add_clips("deepmimic_run");
+  request.set_max_steps_per_clip(40);
+  request.set_seed(3);
+  request.set_stream_frames(true);
+  int frames = 0;
+  auto metrics = client_->Rollout(request, [&](const v1::RolloutFrame&) { ++frames; });
+  ASSERT_TRUE(metrics.ok()) << metrics.status();
+  ASSERT_EQ(metrics->size(), 2u);
+  int steps = 0;
+  for (const v1::ClipMetrics& clip : *metrics) {
+    // Walking open loop earns some of the steer reward but never all of it.
+    EXPECT_GT(clip.normalized_return(), 0.0) << clip.clip();
+    EXPECT_LT(clip.normalized_return(), 1.0) << clip.clip();
+    EXPECT_LE(clip.steps(), 40);
+    steps += clip.steps();
+  }
+  EXPECT_EQ(frames, steps + 2);
+  // The same request again gives the same figures (the goals' seed).
+  auto again = client_->Rollout(request);
+  ASSERT_TRUE(again.ok());
+  EXPECT_EQ((*again)[0].normalized_return(), (*metrics)[0].normalized_return());
+
+  request.set_task("reach");
+  auto other = client_->Rollout(request);
+  ASSERT_FALSE(other.ok());
+  EXPECT_EQ(other.status().code(), absl::StatusCode::kFailedPrecondition);
+  EXPECT_THAT(std::string(other.status().message()), HasSubstr("trained for steer"));
+  // A tracker cannot run a task, nor a task policy tracking.
+  request.set_checkpoint_bytes(OpenLoopPolicyBytes());
+  request.set_task("steer");
+  auto tracker = client_->Rollout(request);
+  ASSERT_FALSE(tracker.ok());
+  EXPECT_EQ(tracker.status().code(), absl::StatusCode::kFailedPrecondition);
+  request.set_task("");
+  request.mutable_task_settings()->set_max_speed(50.f);
+  auto bad = client_->Rollout(request);
+  ASSERT_FALSE(bad.ok());
+  EXPECT_THAT(std::string(bad.status().message()), HasSubstr("task_settings.max_speed"));
+}
+
 }  // namespace
 }  // namespace modskill

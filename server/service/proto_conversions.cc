@@ -75,6 +75,7 @@ void ToProto(const ClipRolloutMetrics& metrics, v1::ClipMetrics* out) {
   for (double e : metrics.body_error_mm) out->add_body_error_mm(e);
   for (double e : metrics.part_error_mm) out->add_part_error_mm(e);
   out->set_max_mean_body_error_m(metrics.worst_mean_body_error);
+  out->set_normalized_return(metrics.normalized_return);
 }
 
 void ToProto(const std::vector<std::string>& part_names, const VariantProvenance& provenance,

@@ -34,6 +34,20 @@ absl::Status CheckActionMode(const v1::RolloutRequest& request, const ActionMapp
   return absl::OkStatus();
 }
 
+// The task the checkpoint was trained for; a request that names another is refused.
+absl::StatusOr<TaskKind> RolloutTask(const v1::RolloutRequest& request, const PolicySpec& trained) {
+  absl::StatusOr<TaskKind> task = ParseTask(trained.task);
+  if (!task.ok()) {
+    return absl::FailedPreconditionError(absl::StrCat("checkpoint: trained for task '", ShownValue(trained.task),
+                                                      "' that this server does not offer"));
+  }
+  if (!request.task().empty() && request.task() != TaskInfoOf(*task).name) {
+    return absl::FailedPreconditionError(absl::StrCat("task: the checkpoint was trained for ", TaskInfoOf(*task).name,
+                                                      "; it cannot run ", ShownValue(request.task())));
+  }
+  return task;
+}
+
 // The library ids of the requested clips; none requested: every clip.
 absl::StatusOr<std::vector<int>> RolloutClipIds(const v1::RolloutRequest& request, const MotionLibrary& motions) {
   std::vector<int> clip_ids;
@@ -107,12 +121,16 @@ grpc::Status SimulationService::Rollout(grpc::ServerContext* context, const v1::
     return ToGrpcStatus(absl::FailedPreconditionError(absl::StrCat(
         "checkpoint: trained with layout '", ShownValue(trained.part_layout), "' that this server does not offer")));
   }
-  if (absl::Status status = CheckPolicyFitsEnv(trained, MakeEnvSpec(*humanoid_, *layout)); !status.ok()) {
+  absl::StatusOr<TaskKind> task = RolloutTask(*request, trained);
+  if (!task.ok()) return ToGrpcStatus(task.status());
+  if (absl::Status status = CheckPolicyFitsEnv(trained, MakeEnvSpec(*humanoid_, *layout, *task), TaskInfoOf(*task).name);
+      !status.ok()) {
     return ToGrpcStatus(status);
   }
   if (absl::Status status = CheckActionMode(*request, trained.action); !status.ok()) return ToGrpcStatus(status);
   absl::StatusOr<RolloutOptions> options = RolloutOptionsFor(*request, trained.action);
   if (!options.ok()) return ToGrpcStatus(options.status());
+  options->task = *task;
   std::shared_ptr<const MotionLibrary> motions = motions_.Snapshot();
   absl::StatusOr<std::vector<int>> clip_ids = RolloutClipIds(*request, *motions);
   if (!clip_ids.ok()) return ToGrpcStatus(clip_ids.status());
@@ -167,6 +185,10 @@ absl::StatusOr<RolloutOptions> SimulationService::RolloutOptionsFor(const v1::Ro
   options.termination_distance = *distance;
   options.action = trained;
   options.max_steps_per_clip = request.max_steps_per_clip();
+  auto task_settings = ToTaskSettings(request.task_settings());
+  if (!task_settings.ok()) return task_settings.status();
+  options.task_settings = *task_settings;
+  options.seed = request.seed();
   options.num_threads = options_.threads_per_session;
   options.physics = options_.physics;
   return options;
