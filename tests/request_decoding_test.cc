@@ -7,9 +7,13 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "absl/strings/str_cat.h"
 #include "common/policy/policy_spec.h"
 #include "server/core/sim/humanoid_spec.h"
 #include "server/core/sim/part_layout.h"
@@ -122,6 +126,33 @@ TEST(PolicySpecTest, BadSpecsAreInvalidArgument) {
                            R"({"part_layout": "5part", "obs_size": 1, "action_size": 1, "joint_names": [],
                                "control_dt": 0.03, "action_mode": "sideways"})"}) {
     EXPECT_EQ(PolicySpec::FromJson(json).status().code(), absl::StatusCode::kInvalidArgument) << json;
+  }
+}
+
+// Task and controller_input: recorded and read back; files from before them read as a tracker
+// with part_obs controllers; bad values are INVALID_ARGUMENT naming the field.
+TEST(PolicySpecTest, TaskAndControllerInputRoundTripWithDefaultsForOldFiles) {
+  const std::string old_json =
+      R"({"part_layout": "5part", "obs_size": 3, "action_size": 1, "joint_names": ["a"], "control_dt": 0.03})";
+  auto old_spec = PolicySpec::FromJson(old_json);
+  ASSERT_TRUE(old_spec.ok()) << old_spec.status();
+  EXPECT_EQ(old_spec->task, "tracking");
+  EXPECT_EQ(old_spec->controller_input, "part_obs");
+  PolicySpec task_policy = *old_spec;
+  task_policy.task = "vr_tracking";
+  task_policy.controller_input = "proprioception";
+  auto again = PolicySpec::FromJson(task_policy.ToJson());
+  ASSERT_TRUE(again.ok()) << again.status();
+  EXPECT_EQ(again->task, "vr_tracking");
+  EXPECT_EQ(again->controller_input, "proprioception");
+  const std::string head = old_json.substr(0, old_json.size() - 1);
+  for (const auto& [field, value] : std::vector<std::pair<std::string, std::string>>{
+           {"task", R"("")"}, {"task", R"("Steer!")"}, {"task", R"("a_name_far_longer_than_any_task_name")"},
+           {"task", "7"}, {"controller_input", R"("reference")"}, {"controller_input", "null"}}) {
+    const std::string json = absl::StrCat(head, R"(, ")", field, R"(": )", value, "}");
+    auto bad = PolicySpec::FromJson(json);
+    EXPECT_EQ(bad.status().code(), absl::StatusCode::kInvalidArgument) << json;
+    EXPECT_THAT(std::string(bad.status().message()), ::testing::HasSubstr(field)) << json;
   }
 }
 

@@ -13,6 +13,7 @@ PolicySpec PolicySpecForEnv(const EnvSpec& spec) {
   policy.action_size = spec.action_size;
   policy.joint_names = spec.joint_names;
   policy.control_dt = spec.control_dt;
+  policy.task = TaskInfoOf(spec.task).name;
   return policy;
 }
 

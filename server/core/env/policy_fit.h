@@ -10,7 +10,8 @@
 
 namespace modskill {
 
-// The env's layout, sizes, joint order and control step; the action mapping left at its default.
+// The env's task, layout, sizes, joint order and control step; the action mapping and the
+// controller input left at their defaults.
 PolicySpec PolicySpecForEnv(const EnvSpec& spec);
 
 // FAILED_PRECONDITION naming the first difference (task, layout, sizes, control step, joint
