@@ -10,6 +10,8 @@
 #include "server/core/env/observation.h"
 #include "server/core/env/reach_task.h"
 #include "server/core/env/steer_task.h"
+#include "server/core/env/strike_task.h"
+#include "server/core/sim/mjcf_builder.h"
 #include "tests/test_fixtures.h"
 
 namespace modskill {
@@ -58,6 +60,7 @@ TEST(TaskSpecTest, TaskObservationIsTheSelfFeaturesThenTheGoal) {
   }
   EXPECT_EQ(TaskInfoOf(TaskKind::kSteer).goal_size, 3);
   EXPECT_EQ(TaskInfoOf(TaskKind::kReach).goal_size, 3);
+  EXPECT_EQ(TaskInfoOf(TaskKind::kStrike).goal_size, 15);
   EXPECT_EQ(TaskInfoOf(TaskKind::kVrTracking).goal_size, 72);
 }
 
@@ -110,7 +113,7 @@ TEST(SteerTaskTest, MovingAlongTheTargetAtItsSpeedWhileFacingItEarnsOne) {
   SteerTask steer(&context);
   std::mt19937_64 rng(11);
   HumanoidState state = StandingState();
-  steer.Reset(state, rng);
+  steer.Reset(state, nullptr, rng);
   const Vec3 d = steer.direction();
   EXPECT_NEAR(d.norm(), 1.0, 1e-12);
   EXPECT_EQ(d.z(), 0);
@@ -120,18 +123,18 @@ TEST(SteerTaskTest, MovingAlongTheTargetAtItsSpeedWhileFacingItEarnsOne) {
   state.body_rot[0] = Quat(Eigen::AngleAxisd(std::atan2(d.y(), d.x()), Vec3::UnitZ()));
   state.body_pos[0] += d * steer.speed() * context.control_dt;
   float terms[2];
-  steer.Reward(state, terms);
+  steer.Reward(state, nullptr, terms);
   EXPECT_NEAR(terms[0], 0.7, 1e-6);
   EXPECT_NEAR(terms[1], 0.3, 1e-6);
   // The goal in the heading frame is straight ahead.
   float goal[3];
-  steer.WriteGoal(state, goal);
+  steer.WriteGoal(state, nullptr, goal);
   EXPECT_NEAR(goal[0], 1.0, 1e-6);
   EXPECT_NEAR(goal[1], 0.0, 1e-6);
   EXPECT_FLOAT_EQ(goal[2], static_cast<float>(steer.speed()));
   // Standing still facing away: the speed error alone, no facing reward.
   state.body_rot[0] = Quat(Eigen::AngleAxisd(std::atan2(-d.y(), -d.x()), Vec3::UnitZ()));
-  steer.Reward(state, terms);
+  steer.Reward(state, nullptr, terms);
   EXPECT_NEAR(terms[0], 0.7 * std::exp(-0.25 * steer.speed() * steer.speed()), 1e-6);
   EXPECT_NEAR(terms[1], 0.0, 1e-6);
 }
@@ -159,7 +162,7 @@ TEST(SteerTaskTest, GoalsChangeAtTheSettingsInterval) {
   SteerTask steer(&context);
   std::mt19937_64 rng(3);
   const HumanoidState state = StandingState();
-  steer.Reset(state, rng);
+  steer.Reset(state, nullptr, rng);
   const Vec3 first = steer.direction();
   steer.NextGoal(state, rng);
   steer.NextGoal(state, rng);
@@ -177,24 +180,95 @@ TEST(ReachTaskTest, TargetsLieInTheBoxAndTheHandAtTheTargetEarnsOne) {
   HumanoidState state = StandingState();
   const Quat to_heading = InverseHeadingRotation(state.body_rot[0]);
   for (int draw = 0; draw < 50; ++draw) {
-    reach.Reset(state, rng);
+    reach.Reset(state, nullptr, rng);
     Vec3 local = to_heading * (reach.target() - Vec3(state.body_pos[0].x(), state.body_pos[0].y(), 0));
     EXPECT_LE(std::abs(local.x()), 1.0 + 1e-9);
     EXPECT_LE(std::abs(local.y()), 1.0 + 1e-9);
     EXPECT_GE(local.z(), 0.0);
     EXPECT_LE(local.z(), 2.0);
     float goal[3];
-    reach.WriteGoal(state, goal);
+    reach.WriteGoal(state, nullptr, goal);
     const Vec3 expected = to_heading * (reach.target() - state.body_pos[0]);
     EXPECT_NEAR(goal[2], expected.z(), 1e-5);
   }
   float terms[1];
   state.body_pos[context.right_hand] = reach.target();
-  reach.Reward(state, terms);
+  reach.Reward(state, nullptr, terms);
   EXPECT_FLOAT_EQ(terms[0], 1.f);
   state.body_pos[context.right_hand] = reach.target() + Vec3(0, 0, 1);
-  reach.Reward(state, terms);
+  reach.Reward(state, nullptr, terms);
   EXPECT_NEAR(terms[0], std::exp(-5.0), 1e-7);
+}
+
+// The strike target stands in front at rest, scores 0 standing and 1 lying, and fails the
+// episode when a body it does not allow touches it.
+TEST(StrikeTaskTest, TargetStandsInFrontAndOnlyTheRightArmMayTouchIt) {
+  auto batch = MakeBatch(TaskConfig(TaskKind::kStrike, 1));
+  ASSERT_NE(batch, nullptr);
+  const mjModel* model = batch->humanoid().model();
+  const int joint = mj_name2id(model, mjOBJ_JOINT, kStrikeTargetName);
+  ASSERT_GE(joint, 0) << "a strike session's model has the target";
+  const int qpos = model->jnt_qposadr[joint];
+  TrackingEnv& env = batch->env(0);
+  mjData* data = env.mutable_data();
+  GoalTaskContext context;
+  context.target_qpos = qpos;
+  context.target_qvel = model->jnt_dofadr[joint];
+  context.target_geom = mj_name2id(model, mjOBJ_GEOM, kStrikeTargetName);
+  context.may_touch_target.assign(model->ngeom, 0);
+  const int hand = mj_name2id(model, mjOBJ_GEOM, "R_Hand");
+  ASSERT_GE(hand, 0);
+  context.may_touch_target[hand] = 1;
+  context.may_touch_target[mj_name2id(model, mjOBJ_GEOM, "floor")] = 1;
+  StrikeTask strike(&context);
+  std::mt19937_64 rng(8);
+  for (int draw = 0; draw < 20; ++draw) {
+    env.ResetTo(ClipIndex("deepmimic_walk"), 0, batch->row(0));
+    HumanoidState sim;
+    sim.Resize(24, 69);
+    ReadSimulatedState(batch->humanoid(), data, &sim);
+    strike.Reset(sim, data, rng);
+    Vec3 offset(data->qpos[qpos] - sim.body_pos[0].x(), data->qpos[qpos + 1] - sim.body_pos[0].y(), 0);
+    EXPECT_GE(offset.norm(), StrikeTask::kMinDistance - 1e-9);
+    EXPECT_LE(offset.norm(), StrikeTask::kMaxDistance + 1e-9);
+    EXPECT_GE((HeadingRotation(sim.body_rot[0]) * Vec3::UnitX()).dot(offset), -1e-9) << "in front";
+    float goal[15];
+    strike.WriteGoal(sim, data, goal);
+    EXPECT_NEAR(Vec3(goal[0], goal[1], 0).norm(), offset.norm(), 1e-4);
+    for (int k = 9; k < 15; ++k) EXPECT_EQ(goal[k], 0.f) << "at rest";
+    float terms[1];
+    strike.Reward(sim, data, terms);
+    EXPECT_NEAR(terms[0], 0.f, 1e-6);
+  }
+  // Lying on its side: the full reward.
+  const Quat lying(Eigen::AngleAxisd(M_PI / 2, Vec3::UnitX()));
+  data->qpos[qpos + 3] = lying.w();
+  data->qpos[qpos + 4] = lying.x();
+  data->qpos[qpos + 5] = lying.y();
+  data->qpos[qpos + 6] = lying.z();
+  float terms[1];
+  strike.Reward(StandingState(), data, terms);
+  EXPECT_NEAR(terms[0], 1.f, 1e-6);
+  // Standing where the pelvis is: the torso touches it.
+  const Quat upright = Quat::Identity();
+  data->qpos[qpos + 3] = upright.w();
+  data->qpos[qpos + 4] = data->qpos[qpos + 5] = data->qpos[qpos + 6] = 0;
+  data->qpos[qpos] = data->qpos[0];
+  data->qpos[qpos + 1] = data->qpos[1];
+  mj_forward(model, data);
+  EXPECT_TRUE(strike.Failed(data));
+  // The same contacts with every geom allowed: no failure (only the listed geoms may touch).
+  GoalTaskContext permissive = context;
+  permissive.may_touch_target.assign(model->ngeom, 1);
+  EXPECT_FALSE(StrikeTask(&permissive).Failed(data));
+  // Far from everything: nothing touches it.
+  data->qpos[qpos] = data->qpos[0] + 10;
+  mj_forward(model, data);
+  EXPECT_FALSE(strike.Failed(data));
+  // A target flown far away is lost.
+  data->qpos[qpos] = data->qpos[0] + 50;
+  mj_forward(model, data);
+  EXPECT_TRUE(strike.Failed(data));
 }
 
 TEST(FallDetectionTest, StandingIsNoFallLyingIs) {
@@ -258,6 +332,31 @@ TEST(TaskEnvTest, StepsFallAndTruncate) {
   for (int i = 0; i < 4; ++i) EXPECT_FALSE(short_episodes->buffers().done[i]);
   ASSERT_TRUE(short_episodes->Step(zeros).ok());
   for (int i = 0; i < 4; ++i) EXPECT_TRUE(short_episodes->buffers().done[i] && short_episodes->buffers().truncated[i]);
+}
+
+// A strike batch builds its own model with the target; its envs step, reset the target with
+// every episode and keep the tracking model's humanoid indices.
+TEST(TaskEnvTest, StrikeEpisodesStepAndRestartTheTarget) {
+  auto batch = MakeBatch(TaskConfig(TaskKind::kStrike, 3));
+  ASSERT_NE(batch, nullptr);
+  EXPECT_EQ(batch->humanoid().model()->nq, 7 + 69 + 7);
+  batch->Reset();
+  const std::vector<float> zeros(3 * 69, 0.f);
+  int episodes = 0;
+  for (int step = 0; step < 90; ++step) {
+    ASSERT_TRUE(batch->Step(zeros).ok());
+    for (int i = 0; i < 3; ++i) {
+      const float strike = batch->buffers().reward_terms[i * 2];
+      EXPECT_GE(strike, 0.f);
+      EXPECT_LE(strike, 1.f);
+      episodes += batch->buffers().done[i];
+      // The goal's target stands within reach of a new episode's start or is being played with.
+      const float* goal = &batch->buffers().obs[i * batch->spec().obs_size + batch->spec().goal_obs.start];
+      EXPECT_LT(std::hypot(goal[0], goal[1]), StrikeTask::kLostDistance);
+    }
+  }
+  EXPECT_EQ(batch->physics_resets(), 0);
+  EXPECT_GT(episodes, 0) << "open-loop walking falls or bumps into the target within 3 s";
 }
 
 TEST(TaskSettingsTest, OutOfRangeSettingsNameTheField) {

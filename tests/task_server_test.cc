@@ -24,10 +24,11 @@ TEST_F(SimulationServerTest, DescribeListsTheTasks) {
     EXPECT_FALSE(task.description().empty()) << task.name();
     EXPECT_EQ(task.reward_terms(task.reward_terms_size() - 1), "energy") << task.name();
   }
-  EXPECT_THAT(names, ElementsAre("tracking", "steer", "reach", "vr_tracking"));
+  EXPECT_THAT(names, ElementsAre("tracking", "steer", "reach", "strike", "vr_tracking"));
   EXPECT_EQ(spec->tasks(1).goal_size(), 3);
   EXPECT_THAT(spec->tasks(1).reward_terms(), ElementsAre("speed", "facing", "energy"));
-  EXPECT_EQ(spec->tasks(3).goal_size(), 72);
+  EXPECT_EQ(spec->tasks(3).goal_size(), 15);
+  EXPECT_EQ(spec->tasks(4).goal_size(), 72);
 }
 
 TEST_F(SimulationServerTest, SteerSessionEqualsTheInProcessTaskEnv) {

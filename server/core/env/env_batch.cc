@@ -5,6 +5,7 @@
 
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
+#include "server/core/sim/mjcf_builder.h"
 #include "server/core/util/seed_mixing.h"
 
 namespace modskill {
@@ -26,6 +27,31 @@ void SetUpTask(EnvContext& context) {
   context.goal_task.control_dt = context.spec->control_dt;
   context.goal_task.right_hand = body_spec.BodyIndex("R_Hand");
   context.fall_detector = std::make_shared<const FallDetector>(*context.humanoid);
+  const mjModel* model = context.humanoid->model();
+  const int joint = mj_name2id(model, mjOBJ_JOINT, kStrikeTargetName);
+  if (joint < 0) return;
+  context.goal_task.target_qpos = model->jnt_qposadr[joint];
+  context.goal_task.target_qvel = model->jnt_dofadr[joint];
+  context.goal_task.target_geom = mj_name2id(model, mjOBJ_GEOM, kStrikeTargetName);
+  context.goal_task.may_touch_target.assign(model->ngeom, 0);
+  context.goal_task.may_touch_target[mj_name2id(model, mjOBJ_GEOM, "floor")] = 1;
+  for (const char* name : {"R_Hand", "R_Wrist", "R_Elbow"}) {
+    const int body = context.humanoid->mj_body_id(body_spec.BodyIndex(name));
+    for (int g = 0; g < model->ngeom; ++g) {
+      if (model->geom_bodyid[g] == body) context.goal_task.may_touch_target[g] = 1;
+    }
+  }
+}
+
+// The strike task needs its target in the model; every other task runs on the model as given.
+absl::StatusOr<std::shared_ptr<const HumanoidModel>> ModelForTask(std::shared_ptr<const HumanoidModel> humanoid,
+                                                                  TaskKind task) {
+  if (task != TaskKind::kStrike || mj_name2id(humanoid->model(), mjOBJ_BODY, kStrikeTargetName) >= 0) {
+    return humanoid;
+  }
+  PhysicsOptions physics = humanoid->options();
+  physics.strike_target = true;
+  return HumanoidModel::Create(humanoid->spec(), physics);
 }
 
 }  // namespace
@@ -70,8 +96,10 @@ absl::StatusOr<std::unique_ptr<EnvBatch>> EnvBatch::Create(const EnvBatchConfig&
                                                      humanoid->num_bodies()));
     }
   }
+  auto task_model = ModelForTask(std::move(humanoid), config.env.task);
+  if (!task_model.ok()) return task_model.status();
   std::unique_ptr<EnvBatch> batch(new EnvBatch());
-  batch->context_.humanoid = std::move(humanoid);
+  batch->context_.humanoid = *std::move(task_model);
   batch->context_.spec = std::make_shared<const EnvSpec>(MakeEnvSpec(*batch->context_.humanoid, layout, config.env.task));
   batch->context_.motions = std::move(motions);
   batch->context_.config = config.env;

@@ -13,7 +13,8 @@ FallDetector::FallDetector(const HumanoidModel& humanoid) {
   const std::vector<int> feet = FootBodies(humanoid.spec());
   for (int g = 0; g < model->ngeom; ++g) {
     const int body = model->geom_bodyid[g];
-    may_touch_floor_[g] = body == 0 || std::any_of(feet.begin(), feet.end(), [&](int foot) {
+    // The world, the feet and anything that is not the humanoid (a task's objects) may.
+    may_touch_floor_[g] = body == 0 || body > humanoid.num_bodies() || std::any_of(feet.begin(), feet.end(), [&](int foot) {
                             return humanoid.mj_body_id(foot) == body;
                           });
   }

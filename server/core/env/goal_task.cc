@@ -5,6 +5,7 @@
 
 #include "server/core/env/reach_task.h"
 #include "server/core/env/steer_task.h"
+#include "server/core/env/strike_task.h"
 
 namespace modskill {
 
@@ -17,7 +18,7 @@ void GoalTask::StartGoal(const HumanoidState& sim, std::mt19937_64& rng) {
 }
 
 void GoalTask::NextGoal(const HumanoidState& sim, std::mt19937_64& rng) {
-  if (--steps_left_ <= 0) StartGoal(sim, rng);
+  if (redraws_goals() && --steps_left_ <= 0) StartGoal(sim, rng);
 }
 
 std::unique_ptr<GoalTask> MakeGoalTask(TaskKind kind, const GoalTaskContext* context) {
@@ -26,6 +27,8 @@ std::unique_ptr<GoalTask> MakeGoalTask(TaskKind kind, const GoalTaskContext* con
       return std::make_unique<SteerTask>(context);
     case TaskKind::kReach:
       return std::make_unique<ReachTask>(context);
+    case TaskKind::kStrike:
+      return std::make_unique<StrikeTask>(context);
     case TaskKind::kTracking:
     case TaskKind::kVrTracking:
       return nullptr;

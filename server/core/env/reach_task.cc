@@ -13,11 +13,11 @@ void ReachTask::DrawGoal(const HumanoidState& sim, std::mt19937_64& rng) {
   target_ = ground + HeadingRotation(sim.body_rot[0]) * Vec3(x, y, z);
 }
 
-void ReachTask::Reward(const HumanoidState& sim, float* terms) {
+void ReachTask::Reward(const HumanoidState& sim, const mjData* data, float* terms) {
   terms[0] = static_cast<float>(std::exp(-5.0 * (sim.body_pos[context_->right_hand] - target_).squaredNorm()));
 }
 
-void ReachTask::WriteGoal(const HumanoidState& sim, float* goal) const {
+void ReachTask::WriteGoal(const HumanoidState& sim, const mjData* data, float* goal) const {
   const Vec3 local = InverseHeadingRotation(sim.body_rot[0]) * (target_ - sim.body_pos[0]);
   goal[0] = static_cast<float>(local.x());
   goal[1] = static_cast<float>(local.y());

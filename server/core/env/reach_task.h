@@ -11,11 +11,11 @@ class ReachTask : public GoalTask {
  public:
   explicit ReachTask(const GoalTaskContext* context) : GoalTask(context) {}
 
-  void Reset(const HumanoidState& sim, std::mt19937_64& rng) override { StartGoal(sim, rng); }
+  void Reset(const HumanoidState& sim, mjData* data, std::mt19937_64& rng) override { StartGoal(sim, rng); }
   // reach = exp(-5 |p_R_Hand - c|^2)
-  void Reward(const HumanoidState& sim, float* terms) override;
+  void Reward(const HumanoidState& sim, const mjData* data, float* terms) override;
   // c - p_root in the heading frame (m).
-  void WriteGoal(const HumanoidState& sim, float* goal) const override;
+  void WriteGoal(const HumanoidState& sim, const mjData* data, float* goal) const override;
 
   Vec3 target() const { return target_; }  // world (m), for tests
 

@@ -5,7 +5,7 @@
 
 namespace modskill {
 
-void SteerTask::Reset(const HumanoidState& sim, std::mt19937_64& rng) {
+void SteerTask::Reset(const HumanoidState& sim, mjData* data, std::mt19937_64& rng) {
   previous_root_ = sim.body_pos[0];
   StartGoal(sim, rng);
 }
@@ -16,7 +16,7 @@ void SteerTask::DrawGoal(const HumanoidState& sim, std::mt19937_64& rng) {
   speed_ = std::uniform_real_distribution<double>(context_->settings.min_speed, context_->settings.max_speed)(rng);
 }
 
-void SteerTask::Reward(const HumanoidState& sim, float* terms) {
+void SteerTask::Reward(const HumanoidState& sim, const mjData* data, float* terms) {
   Vec3 velocity = (sim.body_pos[0] - previous_root_) / context_->control_dt;
   velocity.z() = 0;
   previous_root_ = sim.body_pos[0];
@@ -28,7 +28,7 @@ void SteerTask::Reward(const HumanoidState& sim, float* terms) {
   terms[1] = static_cast<float>(0.3 * std::max(0.0, facing.dot(direction_)));
 }
 
-void SteerTask::WriteGoal(const HumanoidState& sim, float* goal) const {
+void SteerTask::WriteGoal(const HumanoidState& sim, const mjData* data, float* goal) const {
   const Vec3 local = InverseHeadingRotation(sim.body_rot[0]) * direction_;
   goal[0] = static_cast<float>(local.x());
   goal[1] = static_cast<float>(local.y());

@@ -11,12 +11,12 @@ class SteerTask : public GoalTask {
  public:
   explicit SteerTask(const GoalTaskContext* context) : GoalTask(context) {}
 
-  void Reset(const HumanoidState& sim, std::mt19937_64& rng) override;
+  void Reset(const HumanoidState& sim, mjData* data, std::mt19937_64& rng) override;
   // speed = 0.7 exp(-0.25 ((v* - d.v)^2 + 0.1 |v - (d.v) d|^2)), v the root's horizontal velocity
   // over the step; facing = 0.3 max(0, f.d), f the root's heading direction.
-  void Reward(const HumanoidState& sim, float* terms) override;
+  void Reward(const HumanoidState& sim, const mjData* data, float* terms) override;
   // [d_x, d_y] in the heading frame, v* (m/s).
-  void WriteGoal(const HumanoidState& sim, float* goal) const override;
+  void WriteGoal(const HumanoidState& sim, const mjData* data, float* goal) const override;
 
   // The goal, for tests: the target direction (world, unit, horizontal) and speed.
   Vec3 direction() const { return direction_; }

@@ -14,7 +14,7 @@
 
 namespace modskill {
 
-enum class TaskKind { kTracking, kSteer, kReach, kVrTracking };
+enum class TaskKind { kTracking, kSteer, kReach, kStrike, kVrTracking };
 
 struct TaskInfo {
   TaskKind kind;
@@ -30,9 +30,11 @@ const TaskInfo& TaskInfoOf(TaskKind kind);
 // "" and "tracking" are tracking; INVALID_ARGUMENT naming the value and the known tasks otherwise.
 absl::StatusOr<TaskKind> ParseTask(absl::string_view name);
 
-// Steer and reach pursue a goal of their own after the start state (GoalTask); tracking and VR
-// tracking follow the clip.
-inline bool IsGoalTask(TaskKind kind) { return kind == TaskKind::kSteer || kind == TaskKind::kReach; }
+// Steer, reach and strike pursue a goal of their own after the start state (GoalTask); tracking
+// and VR tracking follow the clip.
+inline bool IsGoalTask(TaskKind kind) {
+  return kind == TaskKind::kSteer || kind == TaskKind::kReach || kind == TaskKind::kStrike;
+}
 
 // The goal features of the VR task, per watched body: the tracking task features of that body.
 inline constexpr const char* kVrBodies[] = {"Head", "L_Hand", "R_Hand"};

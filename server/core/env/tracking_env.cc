@@ -45,7 +45,7 @@ void TrackingEnv::ResetTo(int clip, int frame, EnvRow row) {
   SetSimulationToReference(*context_->humanoid, motion, frame_, data_);
   if (goal_task_ != nullptr) {
     ReadSimulatedState(*context_->humanoid, data_, &sim_);
-    goal_task_->Reset(sim_, rng_);
+    goal_task_->Reset(sim_, data_, rng_);
   }
   // AMP history starts as the reference's own recent past.
   context_->reference_amp->WriteHistory(clip, frame_, amp_history_.data());
@@ -105,7 +105,8 @@ void TrackingEnv::Step(const float* action, EnvRow row) {
     ScoreGoalTask(terms, row);
     AddEnergyAndSum(power, terms, row);
     const int limit = config.max_episode_steps > 0 ? config.max_episode_steps : kDefaultTaskEpisodeSteps;
-    FinishStep(episode_steps_ > 1 && context_->fall_detector->Fallen(data_, sim_), episode_steps_ >= limit, row);
+    const bool failed = goal_task_->Failed(data_) || (episode_steps_ > 1 && context_->fall_detector->Fallen(data_, sim_));
+    FinishStep(failed, episode_steps_ >= limit, row);
     return;
   }
   const TrackingErrors errors = ScoreTracking(terms, row);
@@ -159,7 +160,7 @@ void TrackingEnv::ScoreGoalTask(float* terms, EnvRow row) {
   BatchBuffers& out = *row.buffers;
   const int i = row.index;
   ReadSimulatedState(*context_->humanoid, data_, &sim_);
-  goal_task_->Reward(sim_, terms);
+  goal_task_->Reward(sim_, data_, terms);
   // No reference to be far from: the errors say nothing in a goal task.
   out.max_body_error[i] = 0.f;
   out.mean_body_error[i] = 0.f;
@@ -243,7 +244,7 @@ void TrackingEnv::WriteObservation(EnvRow row) {
   ReadSimulatedState(*context_->humanoid, data_, &sim_);
   if (goal_task_ != nullptr) {
     WriteSelfObservation(spec, sim_, obs);
-    goal_task_->WriteGoal(sim_, obs + spec.goal_obs.start);
+    goal_task_->WriteGoal(sim_, data_, obs + spec.goal_obs.start);
   } else {
     ReadReferenceState(motion, std::min(frame_ + 1, motion.num_frames - 1), &target_);
     if (spec.task == TaskKind::kVrTracking) {

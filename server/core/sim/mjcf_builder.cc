@@ -74,6 +74,17 @@ std::string BuildHumanoidMjcf(const HumanoidSpec& spec, const PhysicsOptions& op
   absl::StrAppend(&xml, "  <worldbody>\n");
   absl::StrAppend(&xml, "    <geom name=\"floor\" type=\"plane\" size=\"100 100 0.2\" contype=\"1\" conaffinity=\"1\"/>\n");
   AppendBody(spec, options, 0, 2, &xml);
+  if (options.strike_target) {
+    // A 0.4 x 0.4 x 1.8 m pillar of 14.4 kg, colliding with the floor and every body.
+    absl::StrAppend(&xml, absl::StrFormat("    <body name=\"%s\" pos=\"3 0 %.3f\">\n", kStrikeTargetName,
+                                          kStrikeTargetHalfExtents[2]));
+    absl::StrAppend(&xml, "      <freejoint name=\"", kStrikeTargetName, "\"/>\n");
+    absl::StrAppend(&xml, absl::StrFormat("      <geom name=\"%s\" type=\"box\" size=\"%.3f %.3f %.3f\" contype=\"1\" "
+                                          "conaffinity=\"1\" density=\"50\"/>\n",
+                                          kStrikeTargetName, kStrikeTargetHalfExtents[0], kStrikeTargetHalfExtents[1],
+                                          kStrikeTargetHalfExtents[2]));
+    absl::StrAppend(&xml, "    </body>\n");
+  }
   absl::StrAppend(&xml, "  </worldbody>\n");
   if (options.pd_mode == PdMode::kPositionImplicitDamping) {
     // Position servo: force = kp * (ctrl - q), clamped to the torque limit.

@@ -10,6 +10,11 @@
 
 namespace modskill {
 
+// The strike task's target (PhysicsOptions::strike_target): body, joint and geom name, and its
+// half extents (m).
+inline constexpr char kStrikeTargetName[] = "strike_target";
+inline constexpr double kStrikeTargetHalfExtents[3] = {0.2, 0.2, 0.9};
+
 std::string BuildHumanoidMjcf(const HumanoidSpec& spec, const PhysicsOptions& options);
 
 }  // namespace modskill

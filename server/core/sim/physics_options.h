@@ -30,6 +30,9 @@ struct PhysicsOptions {
   double friction = 1.0;
   double armature = 0.01;      // PHC's joint armature; also keeps light hands stable
   double fixed_root_height = 1.2;
+  // A free standing box after the humanoid (the strike task's target, "strike_target"): its
+  // joint comes after the humanoid's in qpos/qvel, so the humanoid's indices do not move.
+  bool strike_target = false;
 
   double physics_dt() const { return 1.0 / (control_hz * substeps); }
   double control_dt() const { return 1.0 / control_hz; }

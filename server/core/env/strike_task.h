@@ -1,0 +1,42 @@
+// Strike (ModSkill Table 4; ASE's and PULSE's strike): knock over a standing pillar (a real
+// MuJoCo body, PhysicsOptions::strike_target) placed at random in front of the humanoid, with the
+// right hand, wrist or elbow only; any other body touching it fails the episode.
+#ifndef MODSKILL_SERVER_CORE_ENV_STRIKE_TASK_H_
+#define MODSKILL_SERVER_CORE_ENV_STRIKE_TASK_H_
+
+#include "server/core/env/goal_task.h"
+
+namespace modskill {
+
+class StrikeTask : public GoalTask {
+ public:
+  // Where a new target stands: this far in front of the root (m), within this angle of the
+  // heading (rad), turned about the vertical at random.
+  static constexpr double kMinDistance = 1.0, kMaxDistance = 3.0, kMaxBearing = M_PI / 2;
+  // A target farther than this from the root has tunnelled or flown off: the episode fails.
+  static constexpr double kLostDistance = 20.0;
+
+  explicit StrikeTask(const GoalTaskContext* context) : GoalTask(context) {}
+
+  // Stands the target up at a random place in front, at rest.
+  void Reset(const HumanoidState& sim, mjData* data, std::mt19937_64& rng) override;
+  // strike = 1 - up . u_target, u_target the target's long axis: 0 standing, 1 lying.
+  void Reward(const HumanoidState& sim, const mjData* data, float* terms) override;
+  // A body other than R_Hand, R_Wrist, R_Elbow touches the target, or the target is lost.
+  bool Failed(const mjData* data) const override;
+  // The target's position relative to the root (3), rotation (6, tangent-normal), linear and
+  // angular velocity (3 + 3), in the heading frame.
+  void WriteGoal(const HumanoidState& sim, const mjData* data, float* goal) const override;
+
+ protected:
+  void DrawGoal(const HumanoidState& sim, std::mt19937_64& rng) override;
+  bool redraws_goals() const override { return false; }
+
+ private:
+  Vec3 position_ = Vec3::Zero();  // where the next target stands (world; z = half its height)
+  double yaw_ = 0;
+};
+
+}  // namespace modskill
+
+#endif  // MODSKILL_SERVER_CORE_ENV_STRIKE_TASK_H_
