@@ -132,6 +132,7 @@ PolicySpec PolicySpecOf(const v1::EnvSpec& spec, const ActionMapping& action) {
   policy.joint_names.assign(spec.joint_names().begin(), spec.joint_names().end());
   policy.control_dt = spec.control_dt();
   policy.action = action;
+  if (!spec.task().empty()) policy.task = spec.task();
   return policy;
 }
 

@@ -39,7 +39,8 @@ absl::StatusOr<EvaluationReport> Evaluate(SimulationClient& client, const std::s
                                           const std::string& checkpoint_bytes, const std::vector<std::string>& clips,
                                           const std::function<void(const v1::RolloutFrame&)>& on_frame = nullptr);
 
-// The metadata of a policy for a server's env `spec`, run with `action` (what policy.pt carries).
+// The metadata of a policy for a server's env `spec` (its task included), run with `action`
+// (what policy.pt carries; the caller sets controller_input).
 PolicySpec PolicySpecOf(const v1::EnvSpec& spec, const ActionMapping& action);
 
 // The open-loop reference baseline: a zero policy in residual mode, so every PD target is the

@@ -13,12 +13,14 @@ absl::StatusOr<ModelConfig> ModelConfig::Preset(absl::string_view name) {
     config.controller_hidden = {2048, 1536, 1024, 512};
     config.critic_hidden = {2048, 1536, 1024, 512};
     config.discriminator_hidden = {1024, 512};
+    config.task_hidden = {2048, 1024, 512};
   } else if (name == "small") {
     config.attention_hidden = {64};
     config.embed_dim = 32;
     config.controller_hidden = {256, 128};
     config.critic_hidden = {256, 128};
     config.discriminator_hidden = {256, 128};
+    config.task_hidden = {256, 128};
   } else {
     return absl::InvalidArgumentError(
         absl::StrCat("model preset '", name, "' not found (known presets: paper, small)"));
@@ -51,7 +53,9 @@ absl::Status CheckTiling(const NetworkLayout& layout, absl::string_view what, in
     const PartSlices& last = layout.parts.back();
     return absl::InvalidArgumentError(absl::StrCat("network layout: part ", layout.parts.size() - 1, " '", last.name,
                                                    "': ", what, " slices end at ", expected, ", but ", what,
-                                                   "_size is ", total));
+                                                   layout.has_goal() && what == "obs" ? " ends (where the goal starts) at "
+                                                                                      : "_size is ",
+                                                   total));
   }
   return absl::OkStatus();
 }
@@ -67,7 +71,13 @@ absl::Status NetworkLayout::Validate() const {
     return absl::InvalidArgumentError(absl::StrCat("network layout: amp_obs_size is ", amp_obs_size));
   }
   if (parts.empty()) return absl::InvalidArgumentError("network layout: no parts");
-  if (absl::Status s = CheckTiling(*this, "obs", obs_size, &PartSlices::obs_start, &PartSlices::obs_size); !s.ok()) {
+  if (goal_size < 0 || (has_goal() && goal_start + goal_size != obs_size)) {
+    return absl::InvalidArgumentError(absl::StrCat("network layout: task ", task, ": goal [", goal_start, ", ",
+                                                   goal_start + goal_size, ") does not end the observation (obs_size ",
+                                                   obs_size, ")"));
+  }
+  if (absl::Status s = CheckTiling(*this, "obs", parts_obs_end(), &PartSlices::obs_start, &PartSlices::obs_size);
+      !s.ok()) {
     return s;
   }
   for (const PartSlices& part : parts) {
@@ -103,6 +113,9 @@ NetworkLayout LayoutFromWireSpec(const v1::EnvSpec& spec) {
   layout.obs_size = spec.obs_size();
   layout.action_size = spec.action_size();
   layout.amp_obs_size = static_cast<int64_t>(spec.amp_history()) * spec.amp_obs_per_frame();
+  if (!spec.task().empty()) layout.task = spec.task();
+  layout.goal_start = spec.goal_obs().start();
+  layout.goal_size = spec.goal_obs().size();
   for (const v1::BodyPart& part : spec.parts()) {
     PartSlices slices;
     slices.name = part.name();

@@ -31,11 +31,15 @@ struct ModelConfig {
   // reuse; PULSE's and ASE's low levels read proprioception and the latent only).
   enum class ControllerInput { kPartObservation, kProprioception };
   ControllerInput controller_input = ControllerInput::kPartObservation;
+  // Skill reuse (a layout with a goal): the high-level policy's MLP from the task observation to
+  // one z per part (paper: {2048, 1024, 512}), and its fixed Gaussian log sigma in z space.
+  std::vector<int64_t> task_hidden;
+  double task_log_std = -2.9;
 
   // "paper": attention {256} -> 64, controllers {2048,1536,1024,512}, critic {2048,1536,1024,512},
-  //          discriminator {1024,512}.
+  //          discriminator {1024,512}, task head {2048,1024,512}.
   // "small" (fits a 2-core CPU): attention {64} -> 32, controllers {256,128}, critic {256,128},
-  //          discriminator {256,128}.
+  //          discriminator {256,128}, task head {256,128}.
   // INVALID_ARGUMENT naming the preset otherwise.
   static absl::StatusOr<ModelConfig> Preset(absl::string_view name);
 };
@@ -55,9 +59,18 @@ struct PartSlices {
 struct NetworkLayout {
   int64_t obs_size = 0, action_size = 0, amp_obs_size = 0;
   std::vector<PartSlices> parts;  // contiguous, in order; obs and action slices each tile [0, size)
+  // The env's task (EnvSpec.task; "tracking" where the server sends none). In a task env the
+  // parts' obs slices hold their bodies' self features only and the goal follows them:
+  // obs = [parts | goal], goal = [goal_start, goal_start + goal_size); goal_size 0 in tracking.
+  std::string task = "tracking";
+  int64_t goal_start = 0, goal_size = 0;
+  bool has_goal() const { return goal_size > 0; }
+  // Where the parts' obs slices end: goal_start with a goal, obs_size without.
+  int64_t parts_obs_end() const { return has_goal() ? goal_start : obs_size; }
   // INVALID_ARGUMENT unless obs_size, action_size and every part's slices are > 0 (amp_obs_size
-  // >= 0: 0 means no discriminator) and the parts' obs and action slices each tile [0, size) in
-  // part order. The message names the part.
+  // >= 0: 0 means no discriminator), the parts' obs slices tile [0, parts_obs_end()) and their
+  // action slices [0, action_size) in part order, and a goal ends at obs_size. The message names
+  // the part (or the goal).
   absl::Status Validate() const;
 };
 

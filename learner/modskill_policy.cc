@@ -6,11 +6,24 @@
 namespace modskill::learner {
 
 ModSkillPolicyImpl::ModSkillPolicyImpl(const NetworkLayout& layout, const ModelConfig& config)
-    : layout_(layout), config_(config), attention_(register_module("attention", SkillAttention(layout, config))) {
-  // SkillAttention validated the layout: the parts' action slices tile [0, action_size) in part
-  // order, so concatenating the parts' means gives the actions in action order.
+    : layout_(layout), config_(config) {
   const int64_t num_parts = static_cast<int64_t>(layout.parts.size());
   const int64_t embed = config.embed_dim;
+  if (task_mode()) {
+    const absl::Status valid = layout.Validate();
+    TORCH_CHECK(valid.ok(), "ModSkillPolicy: ", valid.ToString());
+    TORCH_CHECK(embed > 0, "ModSkillPolicy: embed_dim is ", embed);
+    TORCH_CHECK(proprioceptive() && !config.whole_body, "ModSkillPolicy: task '", layout.task,
+                "' needs per-part proprioceptive controllers (skills of a tracker trained with --controller_input "
+                "proprioception)");
+    task_head_ = register_module("task_head", Mlp(layout.obs_size, config.task_hidden, num_parts * embed,
+                                                  Activation::kElu));
+  } else {
+    // SkillAttention validates the layout.
+    attention_ = register_module("attention", SkillAttention(layout, config));
+  }
+  // The parts' action slices tile [0, action_size) in part order, so concatenating the parts'
+  // means gives the actions in action order.
   if (config.whole_body) {
     controllers_.push_back(register_module(
         "whole_body_controller",
@@ -31,15 +44,38 @@ ModSkillPolicyImpl::ModSkillPolicyImpl(const NetworkLayout& layout, const ModelC
     }
     TORCH_CHECK(next_action == layout.action_size, "ModSkillPolicy: part actions do not cover action_size");
   }
-  log_std_ = register_buffer("log_std", torch::full({layout.action_size}, config.log_std));
+  log_std_ = register_buffer("log_std",
+                             torch::full({sample_size()}, task_mode() ? config.task_log_std : config.log_std));
+}
+
+int64_t ModSkillPolicyImpl::sample_size() const {
+  return task_mode() ? static_cast<int64_t>(layout_.parts.size()) * config_.embed_dim : layout_.action_size;
 }
 
 SkillAttentionOutput ModSkillPolicyImpl::skills(const torch::Tensor& normalized_obs) {
-  return attention_->forward(normalized_obs);
+  if (!task_mode()) return attention_->forward(normalized_obs);
+  const int64_t num_parts = static_cast<int64_t>(layout_.parts.size());
+  return {SkillAttentionImpl::NormalizeToSphere(
+              task_head_->forward(normalized_obs).view({-1, num_parts, config_.embed_dim})),
+          torch::Tensor()};
 }
 
 torch::Tensor ModSkillPolicyImpl::forward(const torch::Tensor& normalized_obs) {
-  const torch::Tensor z = skills(normalized_obs).z;  // [B, P, E]
+  return ControllerActions(normalized_obs, skills(normalized_obs).z);
+}
+
+torch::Tensor ModSkillPolicyImpl::SampleMean(const torch::Tensor& normalized_obs) {
+  return task_mode() ? task_head_->forward(normalized_obs) : forward(normalized_obs);
+}
+
+torch::Tensor ModSkillPolicyImpl::ActionsFor(const torch::Tensor& normalized_obs, const torch::Tensor& sample) {
+  if (!task_mode()) return sample;
+  const int64_t num_parts = static_cast<int64_t>(layout_.parts.size());
+  return ControllerActions(normalized_obs,
+                           SkillAttentionImpl::NormalizeToSphere(sample.view({-1, num_parts, config_.embed_dim})));
+}
+
+torch::Tensor ModSkillPolicyImpl::ControllerActions(const torch::Tensor& normalized_obs, const torch::Tensor& z) {
   if (config_.whole_body) {
     return controllers_[0]->forward(torch::cat({z.flatten(1), normalized_obs}, 1));  // [B, A]
   }

@@ -1,6 +1,13 @@
 // ModSkill's policy: skill attention turns each part's observation into a skill embedding z_k,
 // and one low-level controller per part maps [z_k, part k's observation] (or, with
-// ControllerInput::kProprioception, [z_k, part k's proprioception]) to the means of part k's actions. A Gaussian with a fixed diagonal sigma (log_std, not trained) around the means.
+// ControllerInput::kProprioception, [z_k, part k's proprioception]) to the means of part k's
+// actions. A Gaussian with a fixed diagonal sigma (log_std, not trained) around the means.
+//
+// Skill reuse (a layout with a goal, NetworkLayout::has_goal): a task head replaces the attention
+// and maps the task observation to one z per part for the (frozen, proprioceptive) controllers
+// of a tracker (skill_library.h). Exploration then happens in z space, as in ASE's and PULSE's
+// high levels: PPO samples the task head's raw output and the controllers turn the sample into
+// actions. SampleMean, ActionsFor and sample_size say what is sampled in either mode.
 #ifndef MODSKILL_LEARNER_MODSKILL_POLICY_H_
 #define MODSKILL_LEARNER_MODSKILL_POLICY_H_
 
@@ -14,18 +21,31 @@
 
 namespace modskill::learner {
 
-// Submodules: "attention" (SkillAttention), "controller<p>" per part, or one "whole_body_controller"
-// for the whole-body ablation (input: all z flattened + the full obs, output: all actions).
-// Buffer "log_std" [action_size], filled with config.log_std.
+// Submodules: "attention" (SkillAttention) or, with a goal, "task_head" (Mlp: obs_size ->
+// config.task_hidden... -> P * E); "controller<p>" per part, or one "whole_body_controller" for
+// the whole-body ablation (input: all z flattened + the full obs, output: all actions).
+// Buffer "log_std" [sample_size()], filled with config.log_std (config.task_log_std with a goal).
 class ModSkillPolicyImpl : public torch::nn::Module {
  public:
   ModSkillPolicyImpl(const NetworkLayout& layout, const ModelConfig& config);
 
-  // normalized_obs: [B, obs_size] -> action means: [B, action_size], in action order.
+  // normalized_obs: [B, obs_size] -> deterministic action means: [B, action_size], in action
+  // order (with a goal: the controllers on normalize(task head output)).
   torch::Tensor forward(const torch::Tensor& normalized_obs);
 
-  // normalized_obs: [B, obs_size] -> z [B, P, E], attention [B, P, P]
+  // What PPO samples, and its mean: [B, obs_size] -> [B, sample_size()]. Tracking: the action
+  // means (forward). With a goal: the task head's raw output, [B, P * E].
+  torch::Tensor SampleMean(const torch::Tensor& normalized_obs);
+  // The actions a sample [B, sample_size()] sends: the sample itself in tracking; with a goal the
+  // controllers on z = normalize(sample viewed [B, P, E]).
+  torch::Tensor ActionsFor(const torch::Tensor& normalized_obs, const torch::Tensor& sample);
+  int64_t sample_size() const;
+  bool task_mode() const { return layout_.has_goal(); }
+
+  // normalized_obs: [B, obs_size] -> z [B, P, E], attention [B, P, P] (undefined with a goal)
   SkillAttentionOutput skills(const torch::Tensor& normalized_obs);
+  // The per-part controllers on z [B, P, E] -> action means [B, action_size].
+  torch::Tensor ControllerActions(const torch::Tensor& normalized_obs, const torch::Tensor& z);
 
   // What part p's controller reads beside z_p (config.controller_input): [B, part obs] or
   // [B, the part's proprioceptive features].
@@ -38,7 +58,10 @@ class ModSkillPolicyImpl : public torch::nn::Module {
 
   const NetworkLayout& layout() const { return layout_; }
   const ModelConfig& config() const { return config_; }
+  // Null with a goal.
   const SkillAttention& attention() const { return attention_; }
+  // Null without a goal.
+  const Mlp& task_head() const { return task_head_; }
   // One per part, or one for the whole body.
   const std::vector<PartController>& controllers() const { return controllers_; }
   const torch::Tensor& log_std() const { return log_std_; }
@@ -46,7 +69,8 @@ class ModSkillPolicyImpl : public torch::nn::Module {
  private:
   NetworkLayout layout_;
   ModelConfig config_;
-  SkillAttention attention_;
+  SkillAttention attention_{nullptr};
+  Mlp task_head_{nullptr};
   std::vector<PartController> controllers_;
   torch::Tensor log_std_;
 };

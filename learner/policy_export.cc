@@ -79,60 +79,106 @@ std::string ControllerState(const ModSkillPolicyImpl& policy, size_t p) {
   return absl::StrCat("torch.cat([", absl::StrJoin(slices, ", "), "], 1)");
 }
 
-}  // namespace
-
-std::string PolicyScriptSource(const ModSkillPolicyImpl& policy) {
+// Emits z [B, P, E] (unit norm along E) from the skill attention's key, query and value maps.
+void EmitSkillAttention(const ModSkillPolicyImpl& policy, std::string* src) {
   const NetworkLayout& layout = policy.layout();
   const SkillAttentionImpl& attention = *policy.attention();
-  const size_t num_parts = layout.parts.size();
-  std::string src = "def forward(self, obs):\n";
-  absl::StrAppend(&src, "    # RunningMeanStd::Normalize\n");
-  EmitNormalize("obs", "obs", &src);
-  // Skill attention: per part key, query, value maps.
   std::vector<std::string> keys, queries, values;
-  for (size_t p = 0; p < num_parts; ++p) {
+  for (size_t p = 0; p < layout.parts.size(); ++p) {
     const PartSlices& part = layout.parts[p];
-    absl::StrAppend(&src, "    # part ", p, " '", part.name, "': obs [", part.obs_start, ", ",
+    absl::StrAppend(src, "    # part ", p, " '", part.name, "': obs [", part.obs_start, ", ",
                     part.obs_start + part.obs_size, "), actions [", part.action_start, ", ",
                     part.action_start + part.action_size, ")\n");
-    absl::StrAppend(&src, "    s", p, " = ", Slice(part), "\n");
+    absl::StrAppend(src, "    s", p, " = ", Slice(part), "\n");
     const std::string s = absl::StrCat("s", p);
     values.push_back(absl::StrCat("v", p));
-    EmitMlp(*attention.values()[p], PartPrefix(p, "value"), s, values.back(), &src);
+    EmitMlp(*attention.values()[p], PartPrefix(p, "value"), s, values.back(), src);
     if (attention.uses_attention()) {
       keys.push_back(absl::StrCat("k", p));
       queries.push_back(absl::StrCat("q", p));
-      EmitMlp(*attention.keys()[p], PartPrefix(p, "key"), s, keys.back(), &src);
-      EmitMlp(*attention.queries()[p], PartPrefix(p, "query"), s, queries.back(), &src);
+      EmitMlp(*attention.keys()[p], PartPrefix(p, "key"), s, keys.back(), src);
+      EmitMlp(*attention.queries()[p], PartPrefix(p, "query"), s, queries.back(), src);
     }
   }
-  absl::StrAppend(&src, "    v = torch.stack([", absl::StrJoin(values, ", "), "], 1)\n");
+  absl::StrAppend(src, "    v = torch.stack([", absl::StrJoin(values, ", "), "], 1)\n");
   if (attention.uses_attention()) {
-    absl::StrAppend(&src, "    q = torch.stack([", absl::StrJoin(queries, ", "), "], 1)\n");
-    absl::StrAppend(&src, "    k = torch.stack([", absl::StrJoin(keys, ", "), "], 1)\n");
-    absl::StrAppend(&src, "    alpha = torch.softmax(torch.matmul(q, k.transpose(1, 2)) / ",
+    absl::StrAppend(src, "    q = torch.stack([", absl::StrJoin(queries, ", "), "], 1)\n");
+    absl::StrAppend(src, "    k = torch.stack([", absl::StrJoin(keys, ", "), "], 1)\n");
+    absl::StrAppend(src, "    alpha = torch.softmax(torch.matmul(q, k.transpose(1, 2)) / ",
                     ScriptFloat(std::sqrt(static_cast<double>(attention.embed_dim()))), ", -1)\n");
-    absl::StrAppend(&src, "    z = torch.matmul(alpha, v)\n");
+    absl::StrAppend(src, "    z = torch.matmul(alpha, v)\n");
   } else {
-    absl::StrAppend(&src, "    z = v\n");
+    absl::StrAppend(src, "    z = v\n");
+  }
+}
+
+// Emits z [B, P, E] from the task head (skill reuse): its raw output viewed per part.
+void EmitTaskHead(const ModSkillPolicyImpl& policy, std::string* src) {
+  const NetworkLayout& layout = policy.layout();
+  absl::StrAppend(src, "    # task '", layout.task, "': goal obs [", layout.goal_start, ", ",
+                  layout.goal_start + layout.goal_size, "); one z per part from the task head\n");
+  EmitMlp(*policy.task_head(), "task_head", "x", "h", src);
+  absl::StrAppend(src, "    z = torch.reshape(h, [-1, ", layout.parts.size(), ", ", policy.config().embed_dim, "])\n");
+}
+
+// Emits the actions from z: the part controllers (or the whole-body one), returned.
+void EmitControllers(const ModSkillPolicyImpl& policy, std::string* src) {
+  if (policy.config().whole_body) {
+    absl::StrAppend(src, "    c = torch.cat([torch.flatten(z, 1), x], 1)\n");
+    EmitMlp(*policy.controllers()[0]->mlp(), "whole_body_controller", "c", "a", src);
+    absl::StrAppend(src, "    return a\n");
+    return;
+  }
+  std::vector<std::string> actions;
+  for (size_t p = 0; p < policy.layout().parts.size(); ++p) {
+    absl::StrAppend(src, "    c", p, " = torch.cat([z[:, ", p, "], ", ControllerState(policy, p), "], 1)\n");
+    actions.push_back(absl::StrCat("a", p));
+    EmitMlp(*policy.controllers()[p]->mlp(), PartPrefix(p, "controller"), absl::StrCat("c", p), actions.back(), src);
+  }
+  absl::StrAppend(src, "    return torch.cat([", absl::StrJoin(actions, ", "), "], 1)\n");
+}
+
+// Registers every tensor PolicyScriptSource reads, under the names it reads them by.
+void RegisterPolicyTensors(ModSkillPolicy& policy, RunningMeanStd& obs_norm, torch::jit::Module* module) {
+  const NetworkLayout& layout = policy->layout();
+  module->register_buffer("obs_mean", obs_norm->mean().detach().clone());
+  module->register_buffer("obs_var", obs_norm->var().detach().clone());
+  module->register_buffer("log_std", policy->log_std().detach().clone());
+  if (policy->task_mode()) {
+    RegisterMlp(*policy->task_head(), "task_head", module);
+  } else {
+    const SkillAttentionImpl& attention = *policy->attention();
+    for (size_t p = 0; p < layout.parts.size(); ++p) {
+      RegisterMlp(*attention.values()[p], PartPrefix(p, "value"), module);
+      if (attention.uses_attention()) {
+        RegisterMlp(*attention.keys()[p], PartPrefix(p, "key"), module);
+        RegisterMlp(*attention.queries()[p], PartPrefix(p, "query"), module);
+      }
+    }
+  }
+  if (policy->config().whole_body) {
+    RegisterMlp(*policy->controllers()[0]->mlp(), "whole_body_controller", module);
+  } else {
+    for (size_t p = 0; p < layout.parts.size(); ++p) {
+      RegisterMlp(*policy->controllers()[p]->mlp(), PartPrefix(p, "controller"), module);
+    }
+  }
+}
+
+}  // namespace
+
+std::string PolicyScriptSource(const ModSkillPolicyImpl& policy) {
+  std::string src = "def forward(self, obs):\n";
+  absl::StrAppend(&src, "    # RunningMeanStd::Normalize\n");
+  EmitNormalize("obs", "obs", &src);
+  if (policy.task_mode()) {
+    EmitTaskHead(policy, &src);
+  } else {
+    EmitSkillAttention(policy, &src);
   }
   absl::StrAppend(&src, "    z = z / torch.clamp_min(torch.sqrt(torch.sum(z * z, [-1], True)), ",
                   ScriptFloat(SkillAttentionImpl::kMinNorm), ")\n");
-  // Controllers.
-  if (policy.config().whole_body) {
-    absl::StrAppend(&src, "    c = torch.cat([torch.flatten(z, 1), x], 1)\n");
-    EmitMlp(*policy.controllers()[0]->mlp(), "whole_body_controller", "c", "a", &src);
-    absl::StrAppend(&src, "    return a\n");
-  } else {
-    std::vector<std::string> actions;
-    for (size_t p = 0; p < num_parts; ++p) {
-      absl::StrAppend(&src, "    c", p, " = torch.cat([z[:, ", p, "], ", ControllerState(policy, p), "], 1)\n");
-      actions.push_back(absl::StrCat("a", p));
-      EmitMlp(*policy.controllers()[p]->mlp(), PartPrefix(p, "controller"), absl::StrCat("c", p), actions.back(),
-              &src);
-    }
-    absl::StrAppend(&src, "    return torch.cat([", absl::StrJoin(actions, ", "), "], 1)\n");
-  }
+  EmitControllers(policy, &src);
   return src;
 }
 
@@ -144,6 +190,10 @@ absl::Status ExportPolicy(ModSkillPolicy& policy, RunningMeanStd& obs_norm, cons
                                                    spec.action_size, "; the policy has ", layout.obs_size, ", ",
                                                    layout.action_size));
   }
+  if (spec.task != layout.task) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("ExportPolicy: spec has task ", spec.task, "; the policy's is ", layout.task));
+  }
   if (obs_norm->size() != layout.obs_size) {
     return absl::InvalidArgumentError(absl::StrCat("ExportPolicy: obs_norm has size ", obs_norm->size(),
                                                    ", the policy's obs_size is ", layout.obs_size));
@@ -151,24 +201,7 @@ absl::Status ExportPolicy(ModSkillPolicy& policy, RunningMeanStd& obs_norm, cons
   try {
     torch::NoGradGuard no_grad;
     torch::jit::Module module("ModSkillPolicy");
-    module.register_buffer("obs_mean", obs_norm->mean().detach().clone());
-    module.register_buffer("obs_var", obs_norm->var().detach().clone());
-    module.register_buffer("log_std", policy->log_std().detach().clone());
-    const SkillAttentionImpl& attention = *policy->attention();
-    for (size_t p = 0; p < layout.parts.size(); ++p) {
-      RegisterMlp(*attention.values()[p], PartPrefix(p, "value"), &module);
-      if (attention.uses_attention()) {
-        RegisterMlp(*attention.keys()[p], PartPrefix(p, "key"), &module);
-        RegisterMlp(*attention.queries()[p], PartPrefix(p, "query"), &module);
-      }
-    }
-    if (policy->config().whole_body) {
-      RegisterMlp(*policy->controllers()[0]->mlp(), "whole_body_controller", &module);
-    } else {
-      for (size_t p = 0; p < layout.parts.size(); ++p) {
-        RegisterMlp(*policy->controllers()[p]->mlp(), PartPrefix(p, "controller"), &module);
-      }
-    }
+    RegisterPolicyTensors(policy, obs_norm, &module);
     module.define(PolicyScriptSource(*policy));
     std::ostringstream out(std::ios::binary);
     module.save(out, {{kCheckpointSpecFile, spec.ToJson()}});

@@ -26,9 +26,20 @@ void RunningMeanStdImpl::Update(const torch::Tensor& batch) {
   // M2 = M2_a + M2_b + delta^2 n_a n_b / n; var = M2 / n.
   const torch::Tensor delta = mean_b - mean_;
   const torch::Tensor m2 = var_ * n_a + var_b * n_b + delta.square() * (n_a * n_b / n);
-  mean_.add_(delta * (n_b / n));
-  var_.copy_(m2 / n);
+  if (frozen_.defined()) {
+    mean_.copy_(torch::where(frozen_, mean_, mean_ + delta * (n_b / n)));
+    var_.copy_(torch::where(frozen_, var_, m2 / n));
+  } else {
+    mean_.add_(delta * (n_b / n));
+    var_.copy_(m2 / n);
+  }
   count_.fill_(n);
+}
+
+void RunningMeanStdImpl::FreezeDims(const torch::Tensor& mask) {
+  TORCH_CHECK(mask.dim() == 1 && mask.size(0) == size_ && mask.scalar_type() == torch::kBool,
+              "RunningMeanStd::FreezeDims: expected a bool mask [", size_, "], got ", mask.sizes());
+  frozen_ = mask.clone();
 }
 
 torch::Tensor RunningMeanStdImpl::Normalize(const torch::Tensor& x) const {

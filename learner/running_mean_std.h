@@ -18,6 +18,12 @@ class RunningMeanStdImpl : public torch::nn::Module {
   // algorithm of Chan, Golub, LeVeque (1979), in double precision. No gradient.
   void Update(const torch::Tensor& batch);
 
+  // Dims whose mean and var Update leaves as they are (mask: [D] bool), e.g. the self features of
+  // a task policy, which its frozen skills must see normalized exactly as their tracker saw them.
+  // Not saved with the module: whoever builds the normalizer sets it again (skill_library.h).
+  void FreezeDims(const torch::Tensor& mask);
+  const torch::Tensor& frozen() const { return frozen_; }  // undefined when none was set
+
   // x: [B, D] -> clamp((x - mean) / sqrt(var + 1e-5), -5, 5), in x's dtype: [B, D].
   torch::Tensor Normalize(const torch::Tensor& x) const;
 
@@ -32,6 +38,7 @@ class RunningMeanStdImpl : public torch::nn::Module {
  private:
   int64_t size_;
   torch::Tensor mean_, var_, count_;
+  torch::Tensor frozen_;
 };
 TORCH_MODULE(RunningMeanStd);
 

@@ -16,6 +16,7 @@
 #include "common/log.h"
 #include "common/wire/policy_enums.h"
 #include "learner/evaluation.h"
+#include "learner/ppo_update.h"
 #include "learner/trainer_phases.h"
 
 namespace modskill::learner {
@@ -64,6 +65,26 @@ absl::StatusOr<std::unique_ptr<Trainer>> Trainer::Create(const TrainerConfig& co
   mallopt(M_MMAP_THRESHOLD, 1 << 30);
   mallopt(M_TRIM_THRESHOLD, 1 << 30);
   std::unique_ptr<Trainer> trainer(new Trainer(config));
+  if (!IsTrackingTask(config.task)) {
+    if (absl::Status status = trainer->PrepareTask(); !status.ok()) return status;
+  }
+  trainer->servers_ = std::make_unique<ServerPool>(trainer->PoolOptions());
+  if (absl::Status status = trainer->WaitForServers(); !status.ok()) return status;
+  if (absl::Status status = trainer->BuildNetworks(*trainer->servers_->spec()); !status.ok()) return status;
+  const std::string checkpoint = config.run_dir + "/checkpoint.pt";
+  if (config.resume) {
+    if (absl::Status status = trainer->LoadCheckpoint(checkpoint); !status.ok()) return status;
+    LogLine("resumed %s at iteration %d (%lld env steps)", checkpoint, trainer->iteration_,
+            static_cast<long long>(trainer->env_steps_));
+  }
+  if (absl::Status status = WriteFileAtomically(config.run_dir + "/config.json", trainer->config_.ToJson()); !status.ok()) {
+    return status;
+  }
+  return trainer;
+}
+
+ServerPoolOptions Trainer::PoolOptions() const {
+  const TrainerConfig& config = config_;
   ServerPoolOptions pool;
   pool.servers = config.servers;
   pool.token = config.token;
@@ -76,22 +97,18 @@ absl::StatusOr<std::unique_ptr<Trainer>> Trainer::Create(const TrainerConfig& co
   pool.session.set_action_mode(ToWire(ActionModeOf(config)));
   if (ActionModeOf(config) == ActionMode::kResidual) pool.session.set_residual_scale(static_cast<float>(config.residual_scale));
   // The curriculum's starting distance; every action message then carries the current one.
-  pool.session.set_termination_distance(static_cast<float>(trainer->curriculum_.distance()));
+  pool.session.set_termination_distance(static_cast<float>(curriculum_.distance()));
   pool.session.set_termination_bodies(ToWire(TerminationBodiesOf(config)));
   pool.session.set_amp_obs(v1::FULL);
-  trainer->servers_ = std::make_unique<ServerPool>(pool);
-  if (absl::Status status = trainer->WaitForServers(); !status.ok()) return status;
-  if (absl::Status status = trainer->BuildNetworks(*trainer->servers_->spec()); !status.ok()) return status;
-  const std::string checkpoint = config.run_dir + "/checkpoint.pt";
-  if (config.resume) {
-    if (absl::Status status = trainer->LoadCheckpoint(checkpoint); !status.ok()) return status;
-    LogLine("resumed %s at iteration %d (%lld env steps)", checkpoint, trainer->iteration_,
-            static_cast<long long>(trainer->env_steps_));
+  if (!IsTrackingTask(config.task)) {
+    pool.session.set_task(config.task);
+    v1::TaskSettings* settings = pool.session.mutable_task_settings();
+    settings->set_min_speed(static_cast<float>(config.task_min_speed));
+    settings->set_max_speed(static_cast<float>(config.task_max_speed));
+    settings->set_min_goal_interval_s(static_cast<float>(config.task_min_goal_interval_s));
+    settings->set_max_goal_interval_s(static_cast<float>(config.task_max_goal_interval_s));
   }
-  if (absl::Status status = WriteFileAtomically(config.run_dir + "/config.json", config.ToJson()); !status.ok()) {
-    return status;
-  }
-  return trainer;
+  return pool;
 }
 
 absl::Status Trainer::WaitForServers() {
@@ -120,14 +137,25 @@ absl::Status Trainer::BuildNetworks(const v1::EnvSpec& spec) {
   if (absl::Status status = layout_.Validate(); !status.ok()) {
     return absl::FailedPreconditionError(absl::StrCat("server env spec: ", status.message()));
   }
+  if (layout_.task != config_.task) {
+    return absl::FailedPreconditionError(absl::StrCat("--task ", config_.task, ": the server opened a ", layout_.task,
+                                                      " session (a server without task envs?)"));
+  }
+  if (skills_) {
+    if (absl::Status status = skills_->CheckFits(tracking_spec_, spec); !status.ok()) return status;
+    config_.model = skills_->ConfigFor(config_.model);
+  }
   policy_ = ModSkillPolicy(layout_, config_.model);
   critic_ = Critic(layout_.obs_size, config_.model.critic_hidden);
   discriminator_ = AmpDiscriminator(layout_.amp_obs_size, config_.model.discriminator_hidden);
   obs_norm_ = RunningMeanStd(layout_.obs_size);
   amp_norm_ = RunningMeanStd(layout_.amp_obs_size);
-  std::vector<torch::Tensor> parameters = policy_->parameters();
-  for (const torch::Tensor& p : critic_->parameters()) parameters.push_back(p);
-  optimizer_ = std::make_unique<torch::optim::Adam>(parameters, torch::optim::AdamOptions(config_.learning_rate));
+  if (skills_) {
+    if (absl::Status status = LoadSkills(); !status.ok()) return status;
+  }
+  // The skills' controllers are frozen: only what requires gradients is trained.
+  optimizer_ = std::make_unique<torch::optim::Adam>(TrainableParameters(*policy_, *critic_),
+                                                    torch::optim::AdamOptions(config_.learning_rate));
   discriminator_optimizer_ = std::make_unique<torch::optim::Adam>(
       discriminator_->parameters(), torch::optim::AdamOptions(config_.discriminator_learning_rate));
   return absl::OkStatus();
@@ -190,12 +218,16 @@ absl::StatusOr<IterationStats> Trainer::Iterate() {
     return stats;
   }
   SummarizeEpisodes(&stats);
+  SummarizeTaskEpisodes(collection, &stats);
   const ScopedTorchThreads threads(UpdateThreads());  // the servers wait from here on
   TrainingBatch batch = ComputeReturns(usable);
   if (stats.policy_lag > 0) CenterOnCurrentPolicy(&batch);
   const torch::Tensor expert =
       config_.amp_reward_weight > 0 ? FetchReferenceAmp(usable.front()->slot) : torch::Tensor();
-  if (config_.report_every > 0 && (iteration_ + 1) % config_.report_every == 0) ReportFailures();
+  // Failures of episodes that do not follow clips mean nothing to the servers' clip samplers.
+  if (config_.report_every > 0 && (iteration_ + 1) % config_.report_every == 0 && TaskFollowsClips(config_.task)) {
+    ReportFailures();
+  }
   if (config_.collect_during_update) {
     servers_->Reconnect(static_cast<int64_t>(config_.seed) + iteration_ + 2);
     if (!servers_->Alive().empty()) StartCollection();

@@ -7,8 +7,10 @@
 #include <atomic>
 #include <functional>
 #include <future>
+#include <limits>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -22,6 +24,8 @@
 #include "learner/modskill_policy.h"
 #include "learner/running_mean_std.h"
 #include "learner/server_pool.h"
+#include "learner/skill_library.h"
+#include "learner/task_return.h"
 #include "learner/termination_curriculum.h"
 #include "learner/trainer_config.h"
 
@@ -48,6 +52,10 @@ struct IterationStats {
   // Policy updates between the weights that collected this iteration's batch and the weights it
   // updates: 0, or 1 when collection runs during the update (config.collect_during_update).
   int policy_lag = 0;
+  // Task runs: the mean normalized return (task_return.h) of the episodes that ended during this
+  // iteration's collection; NaN when none ended (and in tracking runs).
+  double normalized_return = std::numeric_limits<double>::quiet_NaN();
+  int task_episodes = 0;  // those episodes
 };
 
 class Trainer {
@@ -68,6 +76,10 @@ class Trainer {
   ModSkillPolicy& policy() { return policy_; }
   RunningMeanStd& obs_norm() { return obs_norm_; }
   ServerPool& servers() { return *servers_; }
+  // The sessions' env spec (the task session's in a task run), and the config as the run uses it
+  // (a task run takes its controller sizes and action mapping from the skills).
+  const v1::EnvSpec& spec() const { return spec_; }
+  const TrainerConfig& config() const { return config_; }
 
   // Full training state (networks, optimizers, normalizers, counters), written atomically.
   absl::Status SaveCheckpoint(const std::string& path);
@@ -77,8 +89,17 @@ class Trainer {
 
  private:
   explicit Trainer(const TrainerConfig& config);
+  // The sessions every server opens (config_'s task, layout, action mapping, termination).
+  ServerPoolOptions PoolOptions() const;
   absl::Status WaitForServers();
   absl::Status BuildNetworks(const v1::EnvSpec& spec);
+  // A task run (trainer_task.cc), before any session opens: loads the skills (errors name the
+  // file), takes their action mapping, and checks that the first server offers config_.task
+  // (INVALID_ARGUMENT naming --task otherwise), keeping its tracking spec.
+  absl::Status PrepareTask();
+  // A task run's networks once the session's spec is known: the skills must fit it; the policy
+  // gets their frozen controllers and the normalizer their statistics of the self features.
+  absl::Status LoadSkills();
   // One PPO iteration, in the phases of the algorithm box: collect, returns, policy update,
   // discriminator update, summary. With config.collect_during_update the next iteration's
   // collection runs on its own thread, with the weights from before the update, while the update runs.
@@ -123,11 +144,18 @@ class Trainer {
                                  const float* truncated);
   // Sends each live session its failure list and logs the hardest clips.
   void ReportFailures();
+  // Task runs: the normalized return of the episodes that ended in `collection`.
+  void SummarizeTaskEpisodes(const Collection& collection, IterationStats* stats) const;
 
   TrainerConfig config_;
   std::unique_ptr<ServerPool> servers_;
   v1::EnvSpec spec_;
   NetworkLayout layout_;
+  // Task runs: the reused skills, Describe's tracking spec of the part layout (where the skills'
+  // features sit in a tracker's observation), and the episode figure.
+  std::optional<SkillLibrary> skills_;
+  v1::EnvSpec tracking_spec_;
+  std::optional<TaskReturn> task_return_;
   ModSkillPolicy policy_{nullptr};
   Critic critic_{nullptr};
   AmpDiscriminator discriminator_{nullptr};
@@ -141,6 +169,7 @@ class Trainer {
   // Episode bookkeeping per env slot of each session.
   std::vector<std::vector<double>> episode_return_;
   std::vector<std::vector<int>> episode_length_;
+  std::vector<std::vector<double>> episode_goal_return_;  // task runs: TaskReturn::GoalReward summed
   std::vector<double> recent_returns_, recent_lengths_;
   std::vector<double> recent_tracked_;  // 1 where a recent episode reached its clip's end
   TerminationCurriculum curriculum_{0.25, 0.25};

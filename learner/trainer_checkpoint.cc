@@ -38,6 +38,7 @@ absl::Status Trainer::SaveCheckpoint(const std::string& path) {
     archive.write("action_mode", torch::tensor(static_cast<int64_t>(ActionModeOf(config_))));
     archive.write("residual_scale", torch::tensor(config_.residual_scale, torch::kFloat64));
     archive.write("termination_distance", torch::tensor(curriculum_.distance(), torch::kFloat64));
+    archive.write("task", c10::IValue(layout_.task));
     std::ostringstream out(std::ios::binary);
     archive.save_to(out);
     return WriteFileAtomically(path, out.str());
@@ -54,6 +55,14 @@ absl::Status Trainer::LoadCheckpoint(const std::string& path) {
     torch::serialize::InputArchive archive;
     std::istringstream in(*bytes, std::ios::binary);
     archive.load_from(in);
+    // Checkpoints from before tasks were trackers.
+    c10::IValue stored_task{std::string(kTrackingTask)};
+    archive.try_read("task", stored_task);
+    const std::string task = stored_task.isString() ? stored_task.toStringRef() : "?";
+    if (task != layout_.task) {
+      return absl::FailedPreconditionError(
+          absl::StrCat(path, ": trained for task ", task, "; resume with --task ", task));
+    }
     torch::Tensor obs_size, action_size, amp_obs_size, iteration, env_steps;
     archive.read("obs_size", obs_size);
     archive.read("action_size", action_size);
@@ -111,7 +120,8 @@ absl::Status Trainer::LoadCheckpoint(const std::string& path) {
 }
 
 absl::Status Trainer::ExportPolicy(const std::string& path) {
-  const PolicySpec spec = PolicySpecOf(spec_, ActionMapping{ActionModeOf(config_), config_.residual_scale});
+  PolicySpec spec = PolicySpecOf(spec_, ActionMapping{ActionModeOf(config_), config_.residual_scale});
+  spec.controller_input = ControllerInputName(config_.model.controller_input);
   return learner::ExportPolicy(policy_, obs_norm_, spec, path);
 }
 

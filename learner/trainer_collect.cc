@@ -17,7 +17,7 @@ namespace modskill::learner {
 
 Trainer::Collection Trainer::Collect(ActingNetworks acting) {
   const int T = config_.horizon;
-  const int64_t O = layout_.obs_size, A = layout_.action_size, M = layout_.amp_obs_size;
+  const int64_t O = layout_.obs_size, S = acting.policy->sample_size(), M = layout_.amp_obs_size;
   Collection collection;
   collection.termination_distance = curriculum_.distance();
   collection.policy_version = acting.version;
@@ -27,7 +27,7 @@ Trainer::Collection Trainer::Collect(ActingNetworks acting) {
     r.slot = slot;
     r.n = slot->num_envs();
     r.obs = torch::zeros({T, r.n, O});
-    r.actions = torch::zeros({T, r.n, A});
+    r.actions = torch::zeros({T, r.n, S});
     r.log_prob = torch::zeros({T, r.n});
     r.values = torch::zeros({T, r.n});
     r.task_reward = torch::zeros({T, r.n});
@@ -47,6 +47,7 @@ Trainer::Collection Trainer::Collect(ActingNetworks acting) {
   if (episode_return_.size() < servers_->slots().size()) {
     episode_return_.resize(servers_->slots().size());
     episode_length_.resize(servers_->slots().size());
+    episode_goal_return_.resize(servers_->slots().size());
   }
   for (SlotRollout& r : rollouts) {
     auto& returns = episode_return_[slot_index_[r.slot]];
@@ -54,6 +55,7 @@ Trainer::Collection Trainer::Collect(ActingNetworks acting) {
     if (returns.size() != static_cast<size_t>(r.n)) {
       returns.assign(r.n, 0.0);
       lengths.assign(r.n, 0);
+      episode_goal_return_[slot_index_[r.slot]].assign(r.n, 0.0);
     }
     // Where the slot's envs are: the last result, or the first observation of a new session.
     const SimulationStream& stream = *r.slot->stream;
@@ -92,19 +94,20 @@ Trainer::Collection Trainer::Collect(ActingNetworks acting) {
 // Observations are normalized with the statistics of the iteration's start and stored
 // normalized, so that PPO's ratios compare the same inputs; the statistics absorb the
 // iteration's observations after the update. (With sigma = exp(-2.9), drifting inputs alone
-// would move log-probabilities by tens of nats.)
+// would move log-probabilities by tens of nats.) PPO samples in the policy's sample space (the
+// actions, or z in a task run); the server gets the actions of the sample.
 absl::Status Trainer::Act(SlotRollout& r, int t, const torch::Tensor& obs, ActingNetworks& acting) {
   torch::NoGradGuard no_grad;
   const torch::Tensor normalized = acting.obs_norm->Normalize(obs);
   r.raw_obs.push_back(obs);
-  const torch::Tensor mean = acting.policy->forward(normalized);
+  const torch::Tensor mean = acting.policy->SampleMean(normalized);
   const torch::Tensor log_std = acting.policy->log_std();
-  const torch::Tensor action = mean + log_std.exp() * torch::randn(mean.sizes(), acting_generator_);
+  const torch::Tensor sample = mean + log_std.exp() * torch::randn(mean.sizes(), acting_generator_);
   r.obs[t].copy_(normalized);
-  r.actions[t].copy_(action);
-  r.log_prob[t].copy_(ModSkillPolicyImpl::LogProb(mean, log_std, action));
+  r.actions[t].copy_(sample);
+  r.log_prob[t].copy_(ModSkillPolicyImpl::LogProb(mean, log_std, sample));
   r.values[t].copy_(acting.critic->forward(normalized));
-  const torch::Tensor contiguous = action.contiguous();
+  const torch::Tensor contiguous = acting.policy->ActionsFor(normalized, sample).contiguous();
   return r.slot->stream->SendActions(contiguous.data_ptr<float>());
 }
 
@@ -126,21 +129,29 @@ absl::Status Trainer::RecordStep(SlotRollout& r, int t) {
   r.reward_terms_sum += terms->to(torch::kFloat64).sum(0);
   auto& returns = episode_return_[slot_index_[r.slot]];
   auto& lengths = episode_length_[slot_index_[r.slot]];
+  auto& goal_returns = episode_goal_return_[slot_index_[r.slot]];
+  const torch::Tensor goal_reward = task_return_ ? task_return_->GoalReward(*terms).contiguous() : torch::Tensor();
+  const double* goal_data = task_return_ ? goal_reward.data_ptr<double>() : nullptr;
   const float* reward_data = reward->data_ptr<float>();
   const float* done_data = done->data_ptr<float>();
   const float* truncated_data = truncated->data_ptr<float>();
   for (int i = 0; i < r.n; ++i) {
     returns[i] += reward_data[i];
     ++lengths[i];
+    if (goal_data != nullptr) goal_returns[i] += goal_data[i];
     if (done_data[i] > 0.5f) {
       recent_returns_.push_back(returns[i]);
       recent_lengths_.push_back(lengths[i]);
       recent_tracked_.push_back(truncated_data[i] > 0.5f ? 1.0 : 0.0);
+      if (task_return_) r.normalized_returns.push_back(task_return_->Normalize(goal_returns[i]));
       returns[i] = 0;
       lengths[i] = 0;
+      goal_returns[i] = 0;
     }
   }
-  return RecordEpisodeEnds(r.slot, result, done_data, truncated_data);
+  // Only episodes that follow clips tell the server's clip sampler something.
+  return TaskFollowsClips(config_.task) ? RecordEpisodeEnds(r.slot, result, done_data, truncated_data)
+                                        : absl::OkStatus();
 }
 
 absl::Status Trainer::RecordEpisodeEnds(SessionSlot* slot, const v1::StepResult& result, const float* done,

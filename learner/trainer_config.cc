@@ -1,10 +1,59 @@
 #include "learner/trainer_config.h"
 
+#include <cmath>
+#include <tuple>
+
 #include <nlohmann/json.hpp>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_join.h"
 
 namespace modskill::learner {
+namespace {
+
+// --task, --skills and the task's settings and sizes; the task's name is checked against the
+// server's list when the trainer starts.
+absl::Status ValidateTask(const TrainerConfig& c) {
+  if (c.task.empty()) return absl::InvalidArgumentError("--task: empty (tracking, or a task the server lists)");
+  if (IsTrackingTask(c.task) != c.skills.empty()) {
+    return absl::InvalidArgumentError(
+        IsTrackingTask(c.task) ? std::string("--skills: only with a --task other than tracking")
+                               : absl::StrCat("--skills: required with --task ", c.task,
+                                              " (a tracker's policy.pt trained with --controller_input proprioception)"));
+  }
+  if (!IsTrackingTask(c.task) && c.model.whole_body) {
+    return absl::InvalidArgumentError("--whole_body: not with a --task (the skills are per-part controllers)");
+  }
+  if (!(std::isfinite(c.model.task_log_std) && c.model.task_log_std > -20 && c.model.task_log_std < 2)) {
+    return absl::InvalidArgumentError(absl::StrCat("--task_log_std: ", c.model.task_log_std, " must be in (-20, 2)"));
+  }
+  for (int64_t size : c.model.task_hidden) {
+    if (size < 1) return absl::InvalidArgumentError(absl::StrCat("--task_hidden: ", size, " must be >= 1"));
+  }
+  // The server's bounds (TaskSettings in modskill.proto), checked here too: a session the
+  // server refuses would only be retried until --server_timeout_s.
+  for (const auto& [flag, value, limit] :
+       {std::tuple<const char*, double, double>{"task_min_speed", c.task_min_speed, 10},
+        {"task_max_speed", c.task_max_speed, 10},
+        {"task_min_goal_interval_s", c.task_min_goal_interval_s, 3600},
+        {"task_max_goal_interval_s", c.task_max_goal_interval_s, 3600}}) {
+    if (!(value >= 0 && value <= limit)) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("--", flag, ": ", value, " must be in [0, ", limit, "] (0: the server's default)"));
+    }
+  }
+  if (c.task_max_speed > 0 && c.task_min_speed > c.task_max_speed) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--task_min_speed: ", c.task_min_speed, " is above --task_max_speed ", c.task_max_speed));
+  }
+  if (c.task_max_goal_interval_s > 0 && c.task_min_goal_interval_s > c.task_max_goal_interval_s) {
+    return absl::InvalidArgumentError(absl::StrCat("--task_min_goal_interval_s: ", c.task_min_goal_interval_s,
+                                                   " is above --task_max_goal_interval_s ", c.task_max_goal_interval_s));
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace
 
 absl::StatusOr<TrainerConfig> TrainerConfig::ForPreset(const std::string& preset) {
   auto model = ModelConfig::Preset(preset);
@@ -63,6 +112,7 @@ absl::Status TrainerConfig::Validate() const {
   if (auto bodies = ParseTerminationBodies(termination_bodies); !bodies.ok()) {
     return absl::InvalidArgumentError(absl::StrCat("--termination_bodies: ", bodies.status().message()));
   }
+  if (absl::Status status = ValidateTask(*this); !status.ok()) return status;
   if (curriculum_start != 0 || curriculum_end != 0) {
     if (!ValidateTerminationDistance(curriculum_start).ok() || !ValidateTerminationDistance(curriculum_end).ok()) {
       return absl::InvalidArgumentError(absl::StrCat("--termination_curriculum: ", curriculum_start, ":",
@@ -76,6 +126,21 @@ absl::Status TrainerConfig::Validate() const {
   }
   return absl::OkStatus();
 }
+
+bool IsTrackingTask(const std::string& task) { return task == "tracking"; }
+
+absl::Status CheckTaskOffered(const v1::EnvSpec& described, const std::string& task, const std::string& server) {
+  std::vector<std::string> offered;
+  for (const v1::TaskInfo& info : described.tasks()) {
+    if (info.name() == task) return absl::OkStatus();
+    offered.push_back(info.name());
+  }
+  return absl::InvalidArgumentError(absl::StrCat(
+      "--task ", task, ": not a task of ", server, " (it offers ",
+      offered.empty() ? "tracking only: a server without task envs" : absl::StrJoin(offered, ", "), ")"));
+}
+
+bool TaskFollowsClips(const std::string& task) { return task == "tracking" || task == "vr_tracking"; }
 
 ActionMode ActionModeOf(const TrainerConfig& config) {
   return config.action_mode == "residual" ? ActionMode::kResidual : ActionMode::kAbsolute;
@@ -118,6 +183,16 @@ std::string TrainerConfig::ToJson() const {
   json["update_threads"] = update_threads;
   json["collect_during_update"] = collect_during_update;
   json["termination_curriculum"] = {curriculum_start, curriculum_end};
+  json["task"] = task;
+  if (!IsTrackingTask(task)) {
+    json["skills"] = skills;
+    json["task_hidden"] = model.task_hidden;
+    json["task_log_std"] = model.task_log_std;
+    json["task_settings"] = {{"min_speed", task_min_speed},
+                             {"max_speed", task_max_speed},
+                             {"min_goal_interval_s", task_min_goal_interval_s},
+                             {"max_goal_interval_s", task_max_goal_interval_s}};
+  }
   return json.dump(1);
 }
 

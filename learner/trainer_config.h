@@ -48,6 +48,15 @@ struct TrainerConfig {
   // The update then keeps the collection's torch threads (update_threads is not used).
   bool collect_during_update = false;
 
+  // Skill reuse (issue 13): a task other than "tracking" ("steer", "reach", "strike",
+  // "vr_tracking"; the server lists its tasks in Describe) trains a high-level policy that drives
+  // the frozen part controllers of the tracker in `skills` (its exported policy.pt, trained with
+  // --controller_input proprioception). The task session then runs the tracker's action mapping.
+  std::string task = "tracking";
+  std::string skills;
+  // SessionConfig.task_settings; 0 in a field: the server's default.
+  double task_min_speed = 0, task_max_speed = 0, task_min_goal_interval_s = 0, task_max_goal_interval_s = 0;
+
   // What to learn with.
   ModelConfig model;
   int iterations = 100;
@@ -84,6 +93,14 @@ struct TrainerConfig {
   absl::Status Validate() const;
   std::string ToJson() const;
 };
+
+// Whether episodes of `task` follow clips, so that their failures mean something to the server's
+// clip sampler (ReportFailures): tracking and vr_tracking.
+bool TaskFollowsClips(const std::string& task);
+bool IsTrackingTask(const std::string& task);
+// INVALID_ARGUMENT naming --task and what `server` offers unless `described` (its Describe
+// answer) lists `task`.
+absl::Status CheckTaskOffered(const v1::EnvSpec& described, const std::string& task, const std::string& server);
 
 // The action mode and the watched bodies of a validated config.
 ActionMode ActionModeOf(const TrainerConfig& config);

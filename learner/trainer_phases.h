@@ -19,10 +19,14 @@ struct Trainer::SlotRollout {
   SessionSlot* slot = nullptr;
   int n = 0;
   bool failed = false;
+  // actions: what PPO sampled, [T, n, sample_size] (the actions sent in tracking; z-space
+  // samples in a task run, ModSkillPolicyImpl::SampleMean).
   torch::Tensor obs, actions, log_prob, values, task_reward, dones, truncated, amp_next;
   torch::Tensor next_obs;  // observation after the last step (raw)
   std::vector<torch::Tensor> raw_obs;  // for the normalizer, after the update
   torch::Tensor reward_terms_sum;
+  // Task runs: the normalized returns (TaskProgress) of the episodes that ended in this rollout.
+  std::vector<double> normalized_returns;
 };
 
 // One collection: every live session's rollout, and what it ran under.
@@ -35,7 +39,7 @@ struct Trainer::Collection {
 // The iteration's experience from every usable session, flattened to [T * N, ...].
 struct Trainer::TrainingBatch {
   torch::Tensor obs;  // normalized with the statistics of the iteration's start
-  torch::Tensor actions, old_log_prob, old_values, advantages, returns;
+  torch::Tensor actions, old_log_prob, old_values, advantages, returns;  // actions: PPO's samples
   torch::Tensor raw_obs;      // for the normalizer
   // AMP observations of live (not ended) rows drawn at random for the discriminator,
   // [amp_samples * discriminator_epochs, M]: copying all T * N rows of 2320 floats cost more

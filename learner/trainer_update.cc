@@ -9,26 +9,17 @@
 #include "learner/amp_loss.h"
 #include "learner/gae.h"
 #include "learner/ppo_loss.h"
+#include "learner/ppo_update.h"
 #include "learner/trainer.h"
 #include "learner/trainer_phases.h"
 #include "learner/wire_torch.h"
 
 namespace modskill::learner {
-namespace {
-
-bool AllFinite(const std::vector<torch::Tensor>& tensors) {
-  for (const torch::Tensor& t : tensors) {
-    if (!torch::isfinite(t).all().item<bool>()) return false;
-  }
-  return true;
-}
-
-}  // namespace
 
 Trainer::TrainingBatch Trainer::ComputeReturns(const std::vector<SlotRollout*>& usable) {
   torch::NoGradGuard no_grad;
   const int T = config_.horizon;
-  const int64_t O = layout_.obs_size, A = layout_.action_size, M = layout_.amp_obs_size;
+  const int64_t O = layout_.obs_size, S = policy_->sample_size(), M = layout_.amp_obs_size;
   TrainingBatch batch;
   batch.terms_sum = torch::zeros({spec_.reward_terms_size()}, torch::kFloat64);
   std::vector<torch::Tensor> obs, actions, log_prob, values, advantages, returns, raw_obs, amp_rows, live_rows;
@@ -46,7 +37,7 @@ Trainer::TrainingBatch Trainer::ComputeReturns(const std::vector<SlotRollout*>& 
     ComputeGae(rewards, r->values, r->dones, last_values, config_.gamma, config_.lambda, &slot_advantages,
                &slot_returns);
     obs.push_back(r->obs.reshape({-1, O}));
-    actions.push_back(r->actions.reshape({-1, A}));
+    actions.push_back(r->actions.reshape({-1, S}));
     log_prob.push_back(r->log_prob.reshape({-1}));
     values.push_back(r->values.reshape({-1}));
     advantages.push_back(slot_advantages.reshape({-1}));
@@ -78,7 +69,7 @@ void Trainer::CenterOnCurrentPolicy(TrainingBatch* batch) {
   const int64_t size = batch->obs.size(0), chunk = 4096;
   for (int64_t begin = 0; begin < size; begin += chunk) {
     const int64_t end = std::min(size, begin + chunk);
-    proximal.push_back(ModSkillPolicyImpl::LogProb(policy_->forward(batch->obs.slice(0, begin, end)), log_std,
+    proximal.push_back(ModSkillPolicyImpl::LogProb(policy_->SampleMean(batch->obs.slice(0, begin, end)), log_std,
                                                    batch->actions.slice(0, begin, end)));
   }
   const torch::Tensor proximal_log_prob = torch::cat(proximal);
@@ -105,58 +96,30 @@ torch::Tensor Trainer::SampleLiveAmp(const std::vector<torch::Tensor>& amp_rows,
   return samples.index_select(0, torch::randperm(samples.size(0), generator_));
 }
 
-// PPO (Schulman et al. 2017). A non-finite loss skips its minibatch; non-finite weights after the
-// update roll back to the weights it started from. Iterate gives the update phases
-// config.update_threads torch threads while the servers wait.
+// PPO (ppo_update.h). Iterate gives the update phases config.update_threads torch threads while
+// the servers wait.
 void Trainer::UpdatePolicy(const TrainingBatch& batch, IterationStats* stats) {
-  std::vector<torch::Tensor> snapshot;
-  for (const torch::Tensor& p : optimizer_->param_groups()[0].params()) snapshot.push_back(p.detach().clone());
-  const torch::Tensor log_std = policy_->log_std();
-  double policy_loss = 0, value_loss = 0, approx_kl = 0, clip_fraction = 0;
-  int updates = 0;
-  const int64_t size = batch.obs.size(0);
-  const int64_t minibatch = std::min<int64_t>(config_.minibatch_size, size);
-  for (int epoch = 0; epoch < config_.epochs; ++epoch) {
-    const torch::Tensor order = torch::randperm(size, generator_);
-    for (int64_t begin = 0; begin + minibatch <= size; begin += minibatch) {
-      const torch::Tensor index = order.slice(0, begin, begin + minibatch);
-      const torch::Tensor obs = batch.obs.index_select(0, index);
-      const torch::Tensor new_log_prob =
-          ModSkillPolicyImpl::LogProb(policy_->forward(obs), log_std, batch.actions.index_select(0, index));
-      PpoLossTerms loss = ComputePpoLoss(new_log_prob, batch.old_log_prob.index_select(0, index),
-                                         batch.advantages.index_select(0, index), critic_->forward(obs),
-                                         batch.old_values.index_select(0, index), batch.returns.index_select(0, index),
-                                         config_.clip_ratio, config_.value_clip, config_.value_coefficient);
-      if (!std::isfinite(loss.total.item<double>())) {
-        ++stats->skipped_updates;
-        continue;
-      }
-      optimizer_->zero_grad();
-      loss.total.backward();
-      torch::nn::utils::clip_grad_norm_(optimizer_->param_groups()[0].params(), config_.max_grad_norm);
-      optimizer_->step();
-      policy_loss += loss.policy_loss.item<double>();
-      value_loss += loss.value_loss.item<double>();
-      approx_kl += loss.approx_kl.item<double>();
-      clip_fraction += loss.clip_fraction.item<double>();
-      ++updates;
-    }
-  }
-  if (!AllFinite(optimizer_->param_groups()[0].params())) {
-    torch::NoGradGuard no_grad;
-    auto& params = optimizer_->param_groups()[0].params();
-    for (size_t i = 0; i < params.size(); ++i) params[i].copy_(snapshot[i]);
+  PpoSettings settings;
+  settings.epochs = config_.epochs;
+  settings.minibatch_size = config_.minibatch_size;
+  settings.clip_ratio = config_.clip_ratio;
+  settings.value_clip = config_.value_clip;
+  settings.value_coefficient = config_.value_coefficient;
+  settings.max_grad_norm = config_.max_grad_norm;
+  const PpoBatch ppo{batch.obs, batch.actions, batch.old_log_prob, batch.old_values, batch.advantages, batch.returns};
+  const PpoUpdateStats update = UpdateWithPpo(*policy_, *critic_, *optimizer_, ppo, settings, generator_);
+  stats->skipped_updates += update.skipped_updates;
+  if (update.rolled_back) {
     LogLine("iteration %d: non-finite weights after the update; kept the last good ones", iteration_ + 1);
-    ++stats->skipped_updates;
   }
   if (stats->skipped_updates > 0) {
     LogLine("iteration %d: skipped %d updates with a non-finite loss", iteration_ + 1, stats->skipped_updates);
   }
-  if (updates > 0) {
-    stats->policy_loss = policy_loss / updates;
-    stats->value_loss = value_loss / updates;
-    stats->approx_kl = approx_kl / updates;
-    stats->clip_fraction = clip_fraction / updates;
+  if (update.updates > 0) {
+    stats->policy_loss = update.policy_loss;
+    stats->value_loss = update.value_loss;
+    stats->approx_kl = update.approx_kl;
+    stats->clip_fraction = update.clip_fraction;
   }
   obs_norm_->Update(batch.raw_obs);
 }

@@ -3,6 +3,10 @@
 //
 //   modskill-learner --servers host:port[,host:port...] --run_dir DIR --preset small|paper --iterations N
 //   modskill-learner --eval --checkpoint DIR/policy.pt --servers host:port [--clips a,b] [--eval_out DIR]
+//
+// Skill reuse: --task steer|reach|strike|vr_tracking --skills TRACKER/policy.pt trains a task
+// policy over the tracker's frozen part controllers; --eval --task ... evaluates one, with
+// --task_baselines beside random and constant z.
 #include <signal.h>
 
 #include <algorithm>
@@ -27,7 +31,11 @@
 #include "common/log.h"
 #include "common/policy/policy_checkpoint.h"
 #include "common/viewer/viewer_wire.h"
+#include "common/wire/policy_enums.h"
 #include "learner/evaluation.h"
+#include "learner/policy_import.h"
+#include "learner/skill_library.h"
+#include "learner/task_evaluation.h"
 #include "learner/tensorboard_writer.h"
 #include "learner/trainer.h"
 
@@ -45,6 +53,22 @@ ABSL_FLAG(bool, no_attention, false, "ablation: no attention across parts");
 ABSL_FLAG(std::string, controller_input, "part_obs",
           "what each part's controller reads beside z: part_obs (the part's whole observation) or proprioception "
           "(the reference reaches it only through z, so that high-level task policies can reuse the controllers)");
+ABSL_FLAG(std::string, task, "tracking",
+          "tracking, or a task env the server lists (steer, reach, strike, vr_tracking): trains a high-level policy "
+          "that drives the frozen part controllers of --skills");
+ABSL_FLAG(std::string, skills, "",
+          "--task: a tracker's exported policy.pt, trained with --controller_input proprioception");
+ABSL_FLAG(double, task_log_std, -2.9, "--task: fixed log standard deviation of the task policy in z space");
+ABSL_FLAG(std::vector<std::string>, task_hidden, {},
+          "--task: hidden sizes of the task head, e.g. 2048,1024,512 (default: the preset's; small 256,128)");
+ABSL_FLAG(double, task_min_speed, 0, "steer: lowest target speed, m/s (0: the server's default, 0.5)");
+ABSL_FLAG(double, task_max_speed, 0, "steer: highest target speed, m/s (0: the server's default, 3)");
+ABSL_FLAG(double, task_min_goal_interval_s, 0, "steer, reach: shortest time between goals, s (0: default 2)");
+ABSL_FLAG(double, task_max_goal_interval_s, 0, "steer, reach: longest time between goals, s (0: default 5)");
+ABSL_FLAG(bool, task_baselines, false,
+          "--eval --task: also drive the skills with a random unit z per part each step and with the task "
+          "policy's mean z");
+ABSL_FLAG(int, eval_episodes, 32, "--eval --task: episodes per run (one per env)");
 ABSL_FLAG(int, horizon, 32, "steps per env per iteration");
 ABSL_FLAG(int, epochs, 0, "PPO epochs per iteration (0: the preset's)");
 ABSL_FLAG(int, minibatch_size, 0, "PPO minibatch (0: the preset's)");
@@ -111,6 +135,27 @@ void WriteEvalPage(RolloutViewerRecorder& page, std::string title, const std::st
   }
 }
 
+// --eval_out, or the checkpoint's directory.
+std::string EvalOutDir(const std::string& checkpoint) {
+  std::string out_dir = absl::GetFlag(FLAGS_eval_out);
+  if (out_dir.empty()) out_dir = std::filesystem::path(checkpoint).parent_path().string();
+  return out_dir.empty() ? "." : out_dir;
+}
+
+// Prints `markdown` and writes it and `json` as eval.md and eval.json in `out_dir`.
+int WriteEvalFiles(const std::string& out_dir, const std::string& markdown, const std::string& json) {
+  std::printf("%s", markdown.c_str());
+  std::error_code error;
+  std::filesystem::create_directories(out_dir, error);
+  for (const auto& [name, text] : {std::pair<std::string, std::string>{"eval.json", json}, {"eval.md", markdown}}) {
+    if (absl::Status status = WriteFileAtomically(out_dir + "/" + name, text); !status.ok()) {
+      return Fail(std::string(status.message()));
+    }
+  }
+  LogLine("wrote %s/eval.json and %s/eval.md", out_dir, out_dir);
+  return 0;
+}
+
 int RunEvaluation(const std::string& token) {
   const std::string checkpoint = absl::GetFlag(FLAGS_checkpoint);
   const bool baseline_only = absl::GetFlag(FLAGS_baseline);
@@ -150,20 +195,72 @@ int RunEvaluation(const std::string& token) {
                CompareWithBaseline(*report, *baseline);
     json = report->ToJson();
   }
-  std::printf("%s", markdown.c_str());
-  std::string out_dir = absl::GetFlag(FLAGS_eval_out);
-  if (out_dir.empty()) out_dir = std::filesystem::path(checkpoint).parent_path().string();
-  if (out_dir.empty()) out_dir = ".";
-  std::error_code error;
-  std::filesystem::create_directories(out_dir, error);
-  for (const auto& [name, text] : {std::pair<std::string, std::string>{"eval.json", json}, {"eval.md", markdown}}) {
-    if (absl::Status status = WriteFileAtomically(out_dir + "/" + name, text); !status.ok()) {
-      return Fail(std::string(status.message()));
-    }
-  }
-  LogLine("wrote %s/eval.json and %s/eval.md", out_dir, out_dir);
+  const std::string out_dir = EvalOutDir(checkpoint);
+  if (int failed = WriteEvalFiles(out_dir, markdown, json); failed != 0) return failed;
   if (page) WriteEvalPage(*page, absl::StrCat("evaluation of ", checkpoint), out_dir + "/eval.html");
   return 0;
+}
+
+// A task policy and, with --task_baselines, the same skills under random and constant z.
+absl::StatusOr<TaskEvaluationReport> EvaluateTaskFromFlags(SimulationClient& client, const std::string& checkpoint) {
+  const std::string task = absl::GetFlag(FLAGS_task);
+  auto file = ReadExportedPolicy(checkpoint);
+  if (!file.ok()) return file.status();
+  auto described = client.Describe(file->spec.part_layout);
+  if (!described.ok()) return described.status();
+  if (absl::Status status = CheckTaskOffered(*described, task, client.server()); !status.ok()) return status;
+  TaskEvaluationOptions options;
+  options.session.set_part_layout(file->spec.part_layout);
+  options.session.set_task(task);
+  v1::TaskSettings* settings = options.session.mutable_task_settings();
+  settings->set_min_speed(static_cast<float>(absl::GetFlag(FLAGS_task_min_speed)));
+  settings->set_max_speed(static_cast<float>(absl::GetFlag(FLAGS_task_max_speed)));
+  settings->set_min_goal_interval_s(static_cast<float>(absl::GetFlag(FLAGS_task_min_goal_interval_s)));
+  settings->set_max_goal_interval_s(static_cast<float>(absl::GetFlag(FLAGS_task_max_goal_interval_s)));
+  options.session.set_action_mode(ToWire(file->spec.action.mode));
+  if (file->spec.action.mode == ActionMode::kResidual) {
+    options.session.set_residual_scale(static_cast<float>(file->spec.action.residual_scale));
+  }
+  options.session.set_termination(v1::EVALUATION);
+  for (const std::string& clip : absl::GetFlag(FLAGS_motions)) options.session.add_motions(clip);
+  options.episodes = absl::GetFlag(FLAGS_eval_episodes);
+  options.seed = absl::GetFlag(FLAGS_seed);
+  options.baselines = absl::GetFlag(FLAGS_task_baselines);
+  // The task session's spec, from a one-env session.
+  v1::SessionConfig probe = options.session;
+  probe.set_num_envs(1);
+  auto stream = client.OpenSession(probe);
+  if (!stream.ok()) return stream.status();
+  const v1::EnvSpec task_spec = (*stream)->spec();
+  (void)(*stream)->Close();
+  auto imported = ImportTaskPolicy(checkpoint, task_spec);
+  if (!imported.ok()) return imported.status();
+  if (const std::string skills_path = absl::GetFlag(FLAGS_skills); !skills_path.empty()) {
+    auto skills = SkillLibrary::Load(skills_path);
+    if (!skills.ok()) return absl::Status(skills.status().code(), absl::StrCat("--skills: ", skills.status().message()));
+    if (absl::Status status = skills->CheckFits(*described, task_spec); !status.ok()) return status;
+    if (absl::Status status = skills->CheckSameControllers(*imported->policy); !status.ok()) return status;
+  }
+  LogLine("evaluating %s on %s, task %s, %d episodes per run", checkpoint, client.server(), task, options.episodes);
+  return EvaluateTaskPolicy(client, *imported, checkpoint, options);
+}
+
+int RunTaskEvaluation(const std::string& token) {
+  const std::string checkpoint = absl::GetFlag(FLAGS_checkpoint);
+  if (checkpoint.empty()) return Fail("--eval --task needs --checkpoint (a task run's policy.pt)", 2);
+  if (absl::GetFlag(FLAGS_baseline)) {
+    return Fail("--baseline: the open-loop reference baselines a tracker; with --task use --task_baselines", 2);
+  }
+  if (absl::GetFlag(FLAGS_servers).empty()) return Fail("--eval needs --servers", 2);
+  ClientOptions options;
+  options.server = absl::GetFlag(FLAGS_servers)[0];
+  options.token = token;
+  options.tls_ca_file = absl::GetFlag(FLAGS_tls_ca);
+  auto client = SimulationClient::Connect(options);
+  if (!client.ok()) return Fail(std::string(client.status().message()));
+  auto report = EvaluateTaskFromFlags(**client, checkpoint);
+  if (!report.ok()) return Fail(std::string(report.status().message()));
+  return WriteEvalFiles(EvalOutDir(checkpoint), report->ToMarkdown(), report->ToJson());
 }
 
 // --milestones: "1e6,5e6" -> sorted step counts.
@@ -178,6 +275,28 @@ absl::StatusOr<std::vector<int64_t>> ParseMilestones(const std::vector<std::stri
   }
   std::sort(steps.begin(), steps.end());
   return steps;
+}
+
+// --task, --skills, the task head and the task's settings.
+absl::Status TaskFromFlags(TrainerConfig* config) {
+  config->task = absl::GetFlag(FLAGS_task);
+  config->skills = absl::GetFlag(FLAGS_skills);
+  config->model.task_log_std = absl::GetFlag(FLAGS_task_log_std);
+  if (const std::vector<std::string> hidden = absl::GetFlag(FLAGS_task_hidden); !hidden.empty()) {
+    config->model.task_hidden.clear();
+    for (const std::string& size : hidden) {
+      int64_t value = 0;
+      if (!absl::SimpleAtoi(size, &value)) {
+        return absl::InvalidArgumentError(absl::StrCat("--task_hidden: '", size.substr(0, 32), "' is not a size"));
+      }
+      config->model.task_hidden.push_back(value);
+    }
+  }
+  config->task_min_speed = absl::GetFlag(FLAGS_task_min_speed);
+  config->task_max_speed = absl::GetFlag(FLAGS_task_max_speed);
+  config->task_min_goal_interval_s = absl::GetFlag(FLAGS_task_min_goal_interval_s);
+  config->task_max_goal_interval_s = absl::GetFlag(FLAGS_task_max_goal_interval_s);
+  return absl::OkStatus();
 }
 
 // The trainer's configuration from --preset and the flags that override it; every error is a
@@ -199,6 +318,7 @@ absl::StatusOr<TrainerConfig> ConfigFromFlags(const std::string& token) {
   auto controller_input = ParseControllerInput(absl::GetFlag(FLAGS_controller_input));
   if (!controller_input.ok()) return controller_input.status();
   config->model.controller_input = *controller_input;
+  if (absl::Status status = TaskFromFlags(&*config); !status.ok()) return status;
   config->horizon = absl::GetFlag(FLAGS_horizon);
   if (absl::GetFlag(FLAGS_epochs) > 0) config->epochs = absl::GetFlag(FLAGS_epochs);
   if (absl::GetFlag(FLAGS_discriminator_epochs) > 0) config->discriminator_epochs = absl::GetFlag(FLAGS_discriminator_epochs);
@@ -232,38 +352,61 @@ absl::StatusOr<TrainerConfig> ConfigFromFlags(const std::string& token) {
   return config;
 }
 
-// The columns of progress.csv (and, from the third on, the TensorBoard scalars), in row order.
-const std::vector<std::string>& ProgressColumns() {
-  static const std::vector<std::string> columns = {
-      "iteration", "env_steps", "env_steps_per_second", "mean_task_reward", "mean_amp_reward", "episode_return",
-      "episode_length", "reward_pos", "reward_rot", "reward_vel", "reward_ang_vel", "reward_energy", "policy_loss",
-      "value_loss", "approx_kl", "clip_fraction", "discriminator_loss", "expert_logit", "policy_logit",
-      "gradient_penalty", "live_sessions", "wall_seconds", "termination_distance", "tracked_share",
-      "collect_seconds", "update_seconds", "policy_lag"};
+// Reward terms with a column: the session's, at most as many as IterationStats keeps.
+int NumRewardColumns(const Trainer& trainer) {
+  return std::min<int>(trainer.spec().reward_terms_size(), std::size(IterationStats{}.reward_terms));
+}
+
+// The columns of progress.csv (and, from the third on, the TensorBoard scalars), in row order:
+// one reward_<term> per reward term of the session (tracking: pos, rot, vel, ang_vel, energy),
+// and in task runs the normalized return.
+std::vector<std::string> ProgressColumns(const Trainer& trainer) {
+  std::vector<std::string> columns = {"iteration",        "env_steps",       "env_steps_per_second",
+                                      "mean_task_reward", "mean_amp_reward", "episode_return",
+                                      "episode_length"};
+  for (int k = 0; k < NumRewardColumns(trainer); ++k) columns.push_back("reward_" + trainer.spec().reward_terms(k));
+  for (const char* column : {"policy_loss", "value_loss", "approx_kl", "clip_fraction", "discriminator_loss",
+                             "expert_logit", "policy_logit", "gradient_penalty", "live_sessions", "wall_seconds",
+                             "termination_distance", "tracked_share", "collect_seconds", "update_seconds",
+                             "policy_lag"}) {
+    columns.push_back(column);
+  }
+  if (!IsTrackingTask(trainer.config().task)) columns.push_back("normalized_return");
   return columns;
 }
 
 // One iteration's figures in ProgressColumns() order.
-std::vector<double> ProgressRow(const IterationStats& s, double elapsed) {
-  return {double(s.iteration), double(s.env_steps), s.env_steps_per_second, s.mean_task_reward, s.mean_amp_reward,
-          s.mean_episode_return, s.mean_episode_length, s.reward_terms[0], s.reward_terms[1], s.reward_terms[2],
-          s.reward_terms[3], s.reward_terms[4], s.policy_loss, s.value_loss, s.approx_kl, s.clip_fraction,
-          s.discriminator_loss, s.expert_logit, s.policy_logit, s.gradient_penalty, double(s.live_sessions), elapsed,
-          s.termination_distance, s.tracked_share, s.collect_seconds, s.update_seconds, double(s.policy_lag)};
+std::vector<double> ProgressRow(const IterationStats& s, double elapsed, const Trainer& trainer) {
+  std::vector<double> row = {double(s.iteration), double(s.env_steps), s.env_steps_per_second, s.mean_task_reward,
+                             s.mean_amp_reward, s.mean_episode_return, s.mean_episode_length};
+  for (int k = 0; k < NumRewardColumns(trainer); ++k) row.push_back(s.reward_terms[k]);
+  row.insert(row.end(), {s.policy_loss, s.value_loss, s.approx_kl, s.clip_fraction, s.discriminator_loss,
+                         s.expert_logit, s.policy_logit, s.gradient_penalty, double(s.live_sessions), elapsed,
+                         s.termination_distance, s.tracked_share, s.collect_seconds, s.update_seconds,
+                         double(s.policy_lag)});
+  if (!IsTrackingTask(trainer.config().task)) row.push_back(s.normalized_return);
+  return row;
 }
 
 // One iteration's line on stdout; `left`: the estimated seconds to the end of the run.
-void PrintIteration(const IterationStats& s, int last, double left) {
+void PrintIteration(const IterationStats& s, const Trainer& trainer, int last, double left) {
+  std::string terms;
+  for (int k = 0; k < NumRewardColumns(trainer); ++k) {
+    absl::StrAppendFormat(&terms, "%s%s %.3f", k ? " " : "", trainer.spec().reward_terms(k), s.reward_terms[k]);
+  }
+  const std::string task = IsTrackingTask(trainer.config().task)
+                               ? ""
+                               : absl::StrFormat("%s %.3f (%d ended) | ", trainer.config().task, s.normalized_return,
+                                                 s.task_episodes);
   std::printf(
-      "it %4d/%d | %9lld steps %5.0f/s | reward %.3f amp %.3f | return %6.2f len %5.1f | "
-      "pos %.3f rot %.3f vel %.3f ang %.3f energy %.3f | pi %+.4f v %.4f kl %.4f clip %.3f | "
+      "it %4d/%d | %9lld steps %5.0f/s | reward %.3f amp %.3f | return %6.2f len %5.1f | %s%s | "
+      "pi %+.4f v %.4f kl %.4f clip %.3f | "
       "D %.3f (expert %+.2f policy %+.2f) | term %.2fm tracked %.2f | sessions %d | collect %.1fs update %.1fs lag %d | "
       "left %s\n",
       s.iteration, last, static_cast<long long>(s.env_steps), s.env_steps_per_second, s.mean_task_reward,
-      s.mean_amp_reward, s.mean_episode_return, s.mean_episode_length, s.reward_terms[0], s.reward_terms[1],
-      s.reward_terms[2], s.reward_terms[3], s.reward_terms[4], s.policy_loss, s.value_loss, s.approx_kl,
-      s.clip_fraction, s.discriminator_loss, s.expert_logit, s.policy_logit, s.termination_distance,
-      s.tracked_share, s.live_sessions, s.collect_seconds, s.update_seconds, s.policy_lag,
+      s.mean_amp_reward, s.mean_episode_return, s.mean_episode_length, task.c_str(), terms.c_str(), s.policy_loss,
+      s.value_loss, s.approx_kl, s.clip_fraction, s.discriminator_loss, s.expert_logit, s.policy_logit,
+      s.termination_distance, s.tracked_share, s.live_sessions, s.collect_seconds, s.update_seconds, s.policy_lag,
       absl::FormatDuration(absl::Seconds(std::round(left))).c_str());
   std::fflush(stdout);
 }
@@ -286,9 +429,9 @@ struct IterationReporter {
     const double per_iteration = elapsed / std::max(1, s.iteration - first);
     double left = per_iteration * (last - s.iteration);
     if (budget_min > 0) left = std::min(left, std::max(0.0, budget_min * 60 - elapsed));
-    PrintIteration(s, last, left);
-    const std::vector<std::string>& columns = ProgressColumns();
-    const std::vector<double> row = ProgressRow(s, elapsed);
+    PrintIteration(s, *trainer, last, left);
+    const std::vector<std::string> columns = ProgressColumns(*trainer);
+    const std::vector<double> row = ProgressRow(s, elapsed, *trainer);
     for (size_t c = 2; c < columns.size(); ++c) (void)events->AddScalar(columns[c], s.env_steps, row[c]);
     (void)events->Flush();
     (void)csv->Append(row);
@@ -331,7 +474,7 @@ int RunTraining(const std::string& token) {
   if (!trainer.ok()) return Fail(std::string(trainer.status().message()));
   auto events = TensorBoardWriter::Open(config->run_dir);
   if (!events.ok()) return Fail(std::string(events.status().message()));
-  auto csv = CsvLogger::Open(config->run_dir + "/progress.csv", ProgressColumns());
+  auto csv = CsvLogger::Open(config->run_dir + "/progress.csv", ProgressColumns(**trainer));
   if (!csv.ok()) return Fail(std::string(csv.status().message()));
 
   IterationReporter reporter{trainer->get(), events->get(), csv->get(), &*config, *std::move(milestones)};
@@ -344,10 +487,11 @@ int RunTraining(const std::string& token) {
   reporter.budget_min = absl::GetFlag(FLAGS_time_budget_min);
   reporter.first = (*trainer)->iteration();
   reporter.last = reporter.first + config->iterations;
-  LogLine("training %s preset on %d server(s), %d envs each, layout %s%s%s, %s actions, run dir %s",
-          config->model.preset, static_cast<int>(config->servers.size()), config->envs_per_server,
-          config->part_layout, config->model.whole_body ? ", whole-body controller" : "",
-          config->model.attention ? "" : ", no attention", config->action_mode, config->run_dir);
+  const TrainerConfig& used = (*trainer)->config();  // a task run's sizes and action mode are its skills'
+  LogLine("training %s preset on %d server(s), %d envs each, task %s, layout %s%s%s, %s actions, run dir %s",
+          used.model.preset, static_cast<int>(used.servers.size()), used.envs_per_server, used.task, used.part_layout,
+          used.model.whole_body ? ", whole-body controller" : "", used.model.attention ? "" : ", no attention",
+          used.action_mode, used.run_dir);
   absl::Status status = (*trainer)->Run([&](const IterationStats& s) { reporter.Report(s); }, &g_stop);
   if (!status.ok()) return Fail(std::string(status.message()));
   return SaveFinalState(**trainer, *config);
@@ -360,7 +504,9 @@ int main(int argc, char** argv) {
   absl::SetProgramUsageMessage(
       "trains or evaluates a ModSkill policy against modskill simulation servers.\n"
       "  modskill-learner --servers host:port --run_dir DIR --preset small --iterations N\n"
-      "  modskill-learner --eval --checkpoint DIR/policy.pt --servers host:port");
+      "  modskill-learner --eval --checkpoint DIR/policy.pt --servers host:port\n"
+      "  modskill-learner --task steer --skills TRACKER/policy.pt --servers host:port --run_dir DIR\n"
+      "  modskill-learner --eval --task steer --checkpoint DIR/policy.pt --servers host:port --task_baselines");
   absl::ParseCommandLine(argc, argv);
   using namespace modskill::learner;
   signal(SIGINT, OnSignal);
@@ -372,5 +518,6 @@ int main(int argc, char** argv) {
     if (!read.ok()) return Fail(absl::StrCat("--auth_token_file: ", read.status().message()), 2);
     token = *read;
   }
-  return absl::GetFlag(FLAGS_eval) ? RunEvaluation(token) : RunTraining(token);
+  if (!absl::GetFlag(FLAGS_eval)) return RunTraining(token);
+  return absl::GetFlag(FLAGS_task) == "tracking" ? RunEvaluation(token) : RunTaskEvaluation(token);
 }

@@ -1,0 +1,81 @@
+#include "learner/ppo_update.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "learner/ppo_loss.h"
+
+namespace modskill::learner {
+namespace {
+
+bool AllFinite(const std::vector<torch::Tensor>& tensors) {
+  for (const torch::Tensor& t : tensors) {
+    if (!torch::isfinite(t).all().item<bool>()) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+std::vector<torch::Tensor> TrainableParameters(ModSkillPolicyImpl& policy, CriticImpl& critic) {
+  std::vector<torch::Tensor> parameters;
+  for (const torch::Tensor& p : policy.parameters()) {
+    if (p.requires_grad()) parameters.push_back(p);
+  }
+  for (const torch::Tensor& p : critic.parameters()) parameters.push_back(p);
+  return parameters;
+}
+
+// A non-finite loss skips its minibatch; non-finite weights after the update roll back to the
+// weights it started from.
+PpoUpdateStats UpdateWithPpo(ModSkillPolicyImpl& policy, CriticImpl& critic, torch::optim::Optimizer& optimizer,
+                             const PpoBatch& batch, const PpoSettings& settings, torch::Generator& generator) {
+  PpoUpdateStats stats;
+  std::vector<torch::Tensor>& params = optimizer.param_groups()[0].params();
+  std::vector<torch::Tensor> snapshot;
+  for (const torch::Tensor& p : params) snapshot.push_back(p.detach().clone());
+  const torch::Tensor log_std = policy.log_std();
+  const int64_t size = batch.obs.size(0);
+  const int64_t minibatch = std::min<int64_t>(settings.minibatch_size, size);
+  for (int epoch = 0; epoch < settings.epochs; ++epoch) {
+    const torch::Tensor order = torch::randperm(size, generator);
+    for (int64_t begin = 0; begin + minibatch <= size; begin += minibatch) {
+      const torch::Tensor index = order.slice(0, begin, begin + minibatch);
+      const torch::Tensor obs = batch.obs.index_select(0, index);
+      const torch::Tensor new_log_prob =
+          ModSkillPolicyImpl::LogProb(policy.SampleMean(obs), log_std, batch.samples.index_select(0, index));
+      PpoLossTerms loss = ComputePpoLoss(new_log_prob, batch.old_log_prob.index_select(0, index),
+                                         batch.advantages.index_select(0, index), critic.forward(obs),
+                                         batch.old_values.index_select(0, index), batch.returns.index_select(0, index),
+                                         settings.clip_ratio, settings.value_clip, settings.value_coefficient);
+      if (!std::isfinite(loss.total.item<double>())) {
+        ++stats.skipped_updates;
+        continue;
+      }
+      optimizer.zero_grad();
+      loss.total.backward();
+      torch::nn::utils::clip_grad_norm_(params, settings.max_grad_norm);
+      optimizer.step();
+      stats.policy_loss += loss.policy_loss.item<double>();
+      stats.value_loss += loss.value_loss.item<double>();
+      stats.approx_kl += loss.approx_kl.item<double>();
+      stats.clip_fraction += loss.clip_fraction.item<double>();
+      ++stats.updates;
+    }
+  }
+  if (!AllFinite(params)) {
+    torch::NoGradGuard no_grad;
+    for (size_t i = 0; i < params.size(); ++i) params[i].copy_(snapshot[i]);
+    stats.rolled_back = true;
+    ++stats.skipped_updates;
+  }
+  if (stats.updates > 0) {
+    stats.policy_loss /= stats.updates;
+    stats.value_loss /= stats.updates;
+    stats.approx_kl /= stats.updates;
+    stats.clip_fraction /= stats.updates;
+  }
+  return stats;
+}
+
+}  // namespace modskill::learner

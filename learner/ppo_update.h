@@ -1,0 +1,47 @@
+// The PPO policy and value update over one iteration's batch (Schulman et al. 2017): epochs of
+// shuffled minibatches, each a clipped-surrogate step of the policy (in its sample space,
+// ModSkillPolicyImpl::SampleMean) and the critic. The trainer runs it; tests run it without a server.
+#ifndef MODSKILL_LEARNER_PPO_UPDATE_H_
+#define MODSKILL_LEARNER_PPO_UPDATE_H_
+
+#include <cstdint>
+#include <vector>
+
+#include <torch/torch.h>
+
+#include "learner/critic.h"
+#include "learner/modskill_policy.h"
+
+namespace modskill::learner {
+
+struct PpoSettings {
+  int epochs = 2;
+  int64_t minibatch_size = 2048;
+  double clip_ratio = 0.2, value_clip = 0.2, value_coefficient = 2.0, max_grad_norm = 1.0;
+};
+
+// One iteration's experience, [N, ...]: normalized observations, the sampled PPO actions
+// ([N, sample_size]), and the behaviour's log-probabilities, values, advantages and returns.
+struct PpoBatch {
+  torch::Tensor obs, samples, old_log_prob, old_values, advantages, returns;
+};
+
+struct PpoUpdateStats {
+  double policy_loss = 0, value_loss = 0, approx_kl = 0, clip_fraction = 0;  // means over the steps taken
+  int updates = 0;          // minibatch steps taken
+  int skipped_updates = 0;  // minibatches skipped for a non-finite loss, plus 1 for a rollback
+  bool rolled_back = false;  // non-finite weights after the update: the weights it started from are back
+};
+
+// What the optimizer trains: the parameters of `policy` that require gradients (not the frozen
+// skills of a task policy), then the critic's.
+std::vector<torch::Tensor> TrainableParameters(ModSkillPolicyImpl& policy, CriticImpl& critic);
+
+// Runs settings.epochs epochs over `batch` with `optimizer` (built on TrainableParameters),
+// minibatch order from `generator`.
+PpoUpdateStats UpdateWithPpo(ModSkillPolicyImpl& policy, CriticImpl& critic, torch::optim::Optimizer& optimizer,
+                             const PpoBatch& batch, const PpoSettings& settings, torch::Generator& generator);
+
+}  // namespace modskill::learner
+
+#endif  // MODSKILL_LEARNER_PPO_UPDATE_H_

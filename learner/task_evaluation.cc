@@ -1,0 +1,210 @@
+#include "learner/task_evaluation.h"
+
+#include <functional>
+#include <optional>
+
+#include <nlohmann/json.hpp>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "learner/policy_import.h"
+#include "learner/task_return.h"
+#include "learner/wire_torch.h"
+
+namespace modskill::learner {
+namespace {
+
+absl::Status Invalid(const std::string& path, const std::string& why) {
+  return absl::InvalidArgumentError(absl::StrCat("--checkpoint ", path, ": ", why));
+}
+
+// The ModelConfig of an exported task policy, read from its weight shapes.
+absl::StatusOr<ModelConfig> TaskConfigOf(const ExportedPolicy& exported, const NetworkLayout& layout) {
+  auto head = exported.Mlp("task_head");
+  auto controller = exported.Mlp("part0_controller");
+  if (!head.ok()) return head.status();
+  if (!controller.ok()) return controller.status();
+  const int64_t parts = static_cast<int64_t>(layout.parts.size());
+  if (head->empty() || controller->empty() || head->back().weight.size(0) % parts != 0) {
+    return Invalid(exported.path, absl::StrCat("no task head with one z per part for ", parts, " parts"));
+  }
+  ModelConfig config = *ModelConfig::Preset("small");
+  config.embed_dim = head->back().weight.size(0) / parts;
+  config.task_hidden = HiddenSizes(*head);
+  config.controller_hidden = HiddenSizes(*controller);
+  config.controller_input = ModelConfig::ControllerInput::kProprioception;
+  return config;
+}
+
+// Copies the exported task head and controllers into `policy`.
+absl::Status CopyTaskPolicy(const ExportedPolicy& exported, ModSkillPolicyImpl& policy) {
+  auto head = exported.Mlp("task_head");
+  if (!head.ok()) return head.status();
+  Mlp task_head = policy.task_head();  // handles that can be written through
+  if (absl::Status status = CopyIntoMlp(*head, *task_head, exported.path + ": task_head"); !status.ok()) {
+    return status;
+  }
+  for (size_t p = 0; p < policy.controllers().size(); ++p) {
+    auto layers = exported.Mlp(absl::StrCat("part", p, "_controller"));
+    if (!layers.ok()) return layers.status();
+    Mlp controller = policy.controllers()[p]->mlp();
+    if (absl::Status status = CopyIntoMlp(*layers, *controller, absl::StrCat(exported.path, ": part ", p, " controller"));
+        !status.ok()) {
+      return status;
+    }
+  }
+  return absl::OkStatus();
+}
+
+// How one run picks z, [n, P, E], from the normalized observation.
+using ZSource = std::function<torch::Tensor(const torch::Tensor& normalized_obs)>;
+
+// One episode in each env (the first each env runs) with z from `z_of`; `z_sum` ([P, E]), when
+// given, gathers the z of every step.
+absl::StatusOr<TaskEvaluationRow> RunEpisodes(SimulationClient& client, ImportedTaskPolicy& imported,
+                                              const TaskEvaluationOptions& options, const std::string& name,
+                                              const ZSource& z_of, torch::Tensor* z_sum) {
+  v1::SessionConfig config = options.session;
+  config.set_num_envs(options.episodes);
+  config.set_seed(options.seed);
+  auto stream = client.OpenSession(config);
+  if (!stream.ok()) return stream.status();
+  const v1::EnvSpec& spec = (*stream)->spec();
+  const int n = options.episodes;
+  const TaskReturn task_return({spec.reward_terms().begin(), spec.reward_terms().end()}, config.max_episode_steps());
+  std::vector<double> goal(n, 0.0), length(n, 0.0);
+  std::vector<bool> ended(n, false);
+  int remaining = n;
+  const v1::StepResult* result = &(*stream)->opened().initial();
+  torch::NoGradGuard no_grad;
+  for (int step = 0; remaining > 0; ++step) {
+    if (step >= options.max_steps) {
+      return absl::DeadlineExceededError(absl::StrCat(name, ": ", remaining, " episodes still running after ", step, " steps"));
+    }
+    auto obs = WireToTorch(result->obs(), "StepResult.obs", v1::FLOAT32, {n, spec.obs_size()});
+    if (!obs.ok()) return obs.status();
+    const torch::Tensor normalized = imported.obs_norm->Normalize(*obs);
+    const torch::Tensor z = z_of(normalized);
+    if (z_sum != nullptr) *z_sum += z.sum(0);
+    const torch::Tensor actions = imported.policy->ControllerActions(normalized, z).contiguous();
+    if (absl::Status status = (*stream)->Step(actions.data_ptr<float>()); !status.ok()) return status;
+    result = &(*stream)->result();
+    auto terms = WireToTorch(result->reward_terms(), "StepResult.reward_terms", v1::FLOAT32, {n, spec.reward_terms_size()});
+    auto done = WireToTorch(result->done(), "StepResult.done", v1::UINT8, {n});
+    if (!terms.ok()) return terms.status();
+    if (!done.ok()) return done.status();
+    const torch::Tensor goal_reward = task_return.GoalReward(*terms).contiguous();
+    for (int i = 0; i < n; ++i) {
+      if (ended[i]) continue;
+      goal[i] += goal_reward.data_ptr<double>()[i];
+      length[i] += 1;
+      if (done->data_ptr<float>()[i] > 0.5f) ended[i] = true, --remaining;
+    }
+  }
+  (void)(*stream)->Close();
+  std::vector<double> returns;
+  for (double g : goal) returns.push_back(task_return.Normalize(g));
+  return TaskEvaluationRow{name, MeanOrNan(returns), MeanOrNan(length), n};
+}
+
+}  // namespace
+
+absl::StatusOr<ImportedTaskPolicy> ImportTaskPolicy(const std::string& path, const v1::EnvSpec& task_spec) {
+  auto exported = ReadExportedPolicy(path);
+  if (!exported.ok()) return exported.status();
+  const PolicySpec& spec = exported->spec;
+  const NetworkLayout layout = LayoutFromWireSpec(task_spec);
+  if (spec.task != layout.task) {
+    return Invalid(path, absl::StrCat("a policy for task ", spec.task, ", the session runs ", layout.task,
+                                      spec.task == kTrackingTask ? " (evaluate trackers without --task)" : ""));
+  }
+  if (spec.part_layout != task_spec.part_layout() || spec.obs_size != layout.obs_size ||
+      spec.action_size != layout.action_size) {
+    return Invalid(path, absl::StrCat("trained on layout ", spec.part_layout, " (obs ", spec.obs_size, ", actions ",
+                                      spec.action_size, "); the session has ", task_spec.part_layout(), " (",
+                                      layout.obs_size, ", ", layout.action_size, ")"));
+  }
+  auto config = TaskConfigOf(*exported, layout);
+  if (!config.ok()) return config.status();
+  ImportedTaskPolicy imported;
+  try {
+    imported.policy = ModSkillPolicy(layout, *config);
+  } catch (const c10::Error& e) {
+    return Invalid(path, e.what_without_backtrace());
+  }
+  if (absl::Status status = CopyTaskPolicy(*exported, *imported.policy); !status.ok()) return status;
+  imported.obs_norm = RunningMeanStd(layout.obs_size);
+  torch::NoGradGuard no_grad;
+  for (const char* name : {"obs_mean", "obs_var"}) {
+    if (!exported->Has(name) || exported->tensors.at(name).numel() != layout.obs_size) {
+      return Invalid(path, absl::StrCat("no ", name, " of ", layout.obs_size, " features"));
+    }
+  }
+  imported.obs_norm->mean().copy_(exported->tensors.at("obs_mean"));
+  imported.obs_norm->var().copy_(exported->tensors.at("obs_var"));
+  return imported;
+}
+
+absl::StatusOr<TaskEvaluationReport> EvaluateTaskPolicy(SimulationClient& client, ImportedTaskPolicy& imported,
+                                                        const std::string& checkpoint_name,
+                                                        const TaskEvaluationOptions& options) {
+  if (options.episodes < 1) return absl::InvalidArgumentError("--eval_episodes: must be >= 1");
+  ModSkillPolicyImpl& policy = *imported.policy;
+  const int64_t parts = static_cast<int64_t>(policy.layout().parts.size()), embed = policy.config().embed_dim;
+  TaskEvaluationReport report;
+  report.task = policy.layout().task;
+  report.checkpoint = checkpoint_name;
+  report.episode_steps = options.session.max_episode_steps() > 0 ? options.session.max_episode_steps()
+                                                                 : kDefaultTaskEpisodeSteps;
+  torch::Tensor z_sum = torch::zeros({parts, embed});
+  auto trained = RunEpisodes(client, imported, options, "task policy (deterministic)",
+                             [&](const torch::Tensor& obs) { return policy.skills(obs).z; }, &z_sum);
+  if (!trained.ok()) return trained.status();
+  report.rows.push_back(*trained);
+  if (!options.baselines) return report;
+  torch::Generator generator = at::detail::createCPUGenerator(options.seed);
+  auto random = RunEpisodes(client, imported, options, "random unit z per part, every step",
+                            [&](const torch::Tensor& obs) {
+                              return SkillAttentionImpl::NormalizeToSphere(
+                                  torch::randn({obs.size(0), parts, embed}, generator));
+                            },
+                            nullptr);
+  if (!random.ok()) return random.status();
+  report.rows.push_back(*random);
+  const torch::Tensor mean_z = SkillAttentionImpl::NormalizeToSphere(z_sum);  // the direction of the mean z
+  auto constant = RunEpisodes(client, imported, options, "constant z (the task policy's mean z per part)",
+                              [&](const torch::Tensor& obs) { return mean_z.expand({obs.size(0), parts, embed}); },
+                              nullptr);
+  if (!constant.ok()) return constant.status();
+  report.rows.push_back(*constant);
+  return report;
+}
+
+std::string TaskEvaluationReport::ToJson() const {
+  nlohmann::json json;
+  json["task"] = task;
+  json["checkpoint"] = checkpoint;
+  json["normalized_by_steps"] = episode_steps;
+  for (const TaskEvaluationRow& row : rows) {
+    json["runs"].push_back({{"z_source", row.z_source},
+                            {"mean_normalized_return", row.mean_normalized_return},
+                            {"mean_episode_length", row.mean_episode_length},
+                            {"episodes", row.episodes}});
+  }
+  return json.dump(1);
+}
+
+std::string TaskEvaluationReport::ToMarkdown() const {
+  std::string md = absl::StrFormat(
+      "Task %s, %s: the same frozen skills driven by different z. Normalized return: per episode, the sum of the "
+      "reward terms other than energy divided by %d steps.\n\n"
+      "| z for the skills | normalized return | episode length (steps) | episodes |\n|---|---|---|---|\n",
+      task, checkpoint, episode_steps);
+  for (const TaskEvaluationRow& row : rows) {
+    absl::StrAppendFormat(&md, "| %s | %.3f | %.1f | %d |\n", row.z_source, row.mean_normalized_return,
+                          row.mean_episode_length, row.episodes);
+  }
+  return md;
+}
+
+}  // namespace modskill::learner

@@ -1,0 +1,39 @@
+// The figure of a task run (skill reuse benchmark): an episode's normalized return, the sum of
+// its reward terms other than "energy" divided by the session's max_episode_steps. Every task's
+// non-energy terms sum to at most 1 per step, so it lies in [0, 1] for an episode that lasts
+// the whole session limit and falls short when the character falls early or misses its goal.
+#ifndef MODSKILL_LEARNER_TASK_RETURN_H_
+#define MODSKILL_LEARNER_TASK_RETURN_H_
+
+#include <string>
+#include <vector>
+
+#include <torch/torch.h>
+
+namespace modskill::learner {
+
+// SessionConfig.max_episode_steps 0 in a task session: 300 steps (modskill.proto).
+inline constexpr int kDefaultTaskEpisodeSteps = 300;
+
+class TaskReturn {
+ public:
+  // reward_terms: the session's (EnvSpec.reward_terms); max_episode_steps 0: the default.
+  TaskReturn(const std::vector<std::string>& reward_terms, int max_episode_steps);
+
+  // terms: [n, K] (StepResult.reward_terms) -> [n] float64, the sum of the non-energy terms.
+  torch::Tensor GoalReward(const torch::Tensor& terms) const;
+  // An episode's summed GoalReward -> its normalized return.
+  double Normalize(double goal_return) const { return goal_return / episode_steps_; }
+  int episode_steps() const { return episode_steps_; }
+
+ private:
+  torch::Tensor goal_terms_;  // [K] float64: 1 for every term but energy
+  int episode_steps_;
+};
+
+// The mean of `values`; NaN when there are none (no episode ended).
+double MeanOrNan(const std::vector<double>& values);
+
+}  // namespace modskill::learner
+
+#endif  // MODSKILL_LEARNER_TASK_RETURN_H_

@@ -1,0 +1,374 @@
+// Skill reuse on the learner's side (issue 13), without a server: the task layout, the skills read
+// from a tracker's exported policy.pt (and the files refused as skills), the task policy over the
+// frozen controllers, PPO updates that leave the controllers and the tracker's normalizer dims
+// alone, and the exported task policy. Specs are the server's, as Describe and a task session
+// send them.
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <torch/script.h>
+#include <torch/torch.h>
+
+#include "common/atomic_file.h"
+#include "common/policy/policy_checkpoint.h"
+#include "learner/critic.h"
+#include "learner/model_config.h"
+#include "learner/modskill_policy.h"
+#include "learner/policy_export.h"
+#include "learner/policy_import.h"
+#include "learner/ppo_update.h"
+#include "learner/running_mean_std.h"
+#include "learner/skill_library.h"
+#include "learner/task_evaluation.h"
+#include "learner/task_return.h"
+#include "server/core/env/env_spec.h"
+#include "server/core/env/policy_fit.h"
+#include "server/core/sim/humanoid_model.h"
+#include "server/core/sim/humanoid_spec.h"
+#include "server/core/sim/part_layout.h"
+#include "server/core/sim/physics_options.h"
+#include "server/service/proto_conversions.h"
+
+namespace modskill::learner {
+namespace {
+
+using ::testing::HasSubstr;
+
+struct Specs {
+  EnvSpec env;
+  v1::EnvSpec wire;
+};
+
+// The server's env spec for a part layout and task, in memory and on the wire.
+const Specs& SpecsOf(const std::string& layout_name, TaskKind task = TaskKind::kTracking) {
+  static std::map<std::pair<std::string, TaskKind>, Specs>* specs = new std::map<std::pair<std::string, TaskKind>, Specs>();
+  auto it = specs->find({layout_name, task});
+  if (it != specs->end()) return it->second;
+  auto humanoid_spec = HumanoidSpec::LoadDefault();
+  EXPECT_TRUE(humanoid_spec.ok()) << humanoid_spec.status();
+  auto humanoid = HumanoidModel::Create(*humanoid_spec, PhysicsOptions());
+  EXPECT_TRUE(humanoid.ok()) << humanoid.status();
+  auto catalog = PartLayoutCatalog::LoadDefault(*humanoid_spec);
+  EXPECT_TRUE(catalog.ok()) << catalog.status();
+  auto layout = catalog->Get(layout_name);
+  EXPECT_TRUE(layout.ok()) << layout.status();
+  Specs made{MakeEnvSpec(**humanoid, *layout, task), {}};
+  ToProto(made.env, **humanoid, &made.wire);
+  return specs->emplace(std::make_pair(layout_name, task), std::move(made)).first->second;
+}
+
+const v1::EnvSpec& Tracking(const std::string& layout = "5part") { return SpecsOf(layout).wire; }
+const v1::EnvSpec& Steer(const std::string& layout = "5part") { return SpecsOf(layout, TaskKind::kSteer).wire; }
+
+ModelConfig SmallConfig() { return *ModelConfig::Preset("small"); }
+
+std::string TmpPath(const std::string& name) {
+  std::filesystem::create_directories(MODSKILL_TEST_TMP_DIR);
+  return std::string(MODSKILL_TEST_TMP_DIR) + "/" + name;
+}
+
+// Statistics as after training: far from mean 0, var 1.
+RunningMeanStd TrainedNormalizer(int64_t size) {
+  RunningMeanStd norm(size);
+  for (int i = 0; i < 3; ++i) norm->Update(torch::randn({64, size}) * 3.0 + torch::linspace(-2, 2, size));
+  return norm;
+}
+
+// A tracker's exported policy.pt with `input` controllers; `record_input` false writes the spec
+// as files from before PolicySpec recorded controller_input did.
+std::string ExportTracker(const std::string& name, const std::string& layout_name = "5part",
+                          ModelConfig::ControllerInput input = ModelConfig::ControllerInput::kProprioception,
+                          bool record_input = true) {
+  ModelConfig config = SmallConfig();
+  config.controller_input = input;
+  ModSkillPolicy tracker(LayoutFromWireSpec(Tracking(layout_name)), config);
+  RunningMeanStd norm = TrainedNormalizer(Tracking(layout_name).obs_size());
+  PolicySpec spec = PolicySpecForEnv(SpecsOf(layout_name).env);
+  if (record_input) spec.controller_input = ControllerInputName(input);
+  const std::string path = TmpPath(name);
+  const absl::Status exported = ExportPolicy(tracker, norm, spec, path);
+  EXPECT_TRUE(exported.ok()) << exported;
+  return path;
+}
+
+const SkillLibrary& Skills() {
+  static const SkillLibrary* skills = [] {
+    auto loaded = SkillLibrary::Load(ExportTracker("skill_reuse_tracker.pt"));
+    EXPECT_TRUE(loaded.ok()) << loaded.status();
+    return new SkillLibrary(*std::move(loaded));
+  }();
+  return *skills;
+}
+
+// A steer policy over the skills' frozen controllers, and its normalizer.
+struct TaskNetworks {
+  ModSkillPolicy policy{nullptr};
+  RunningMeanStd norm{nullptr};
+};
+
+TaskNetworks SteerNetworks() {
+  TaskNetworks made;
+  made.policy = ModSkillPolicy(LayoutFromWireSpec(Steer()), Skills().ConfigFor(SmallConfig()));
+  made.norm = RunningMeanStd(Steer().obs_size());
+  EXPECT_TRUE(Skills().LoadControllers(*made.policy).ok());
+  EXPECT_TRUE(Skills().LoadSelfStatistics(Tracking(), Steer(), *made.norm).ok());
+  return made;
+}
+
+std::vector<torch::Tensor> Clones(const std::vector<torch::Tensor>& tensors) {
+  std::vector<torch::Tensor> clones;
+  for (const torch::Tensor& t : tensors) clones.push_back(t.detach().clone());
+  return clones;
+}
+
+bool AllEqual(const std::vector<torch::Tensor>& a, const std::vector<torch::Tensor>& b) {
+  if (a.size() != b.size()) return false;
+  for (size_t i = 0; i < a.size(); ++i) {
+    if (!torch::equal(a[i], b[i])) return false;
+  }
+  return true;
+}
+
+TEST(SkillReuseTest, TaskLayoutHasTheGoalAfterThePartsSelfFeatures) {
+  const NetworkLayout layout = LayoutFromWireSpec(Steer());
+  EXPECT_EQ(layout.task, "steer");
+  EXPECT_TRUE(layout.has_goal());
+  EXPECT_EQ(layout.goal_start, 358);
+  EXPECT_EQ(layout.goal_size, 3);
+  EXPECT_EQ(layout.obs_size, 361);
+  EXPECT_EQ(layout.parts_obs_end(), 358);
+  EXPECT_TRUE(layout.Validate().ok()) << layout.Validate();
+  for (const PartSlices& part : layout.parts) EXPECT_EQ(part.self_obs_size(), part.obs_size) << part.name;
+  const NetworkLayout tracking = LayoutFromWireSpec(Tracking());
+  EXPECT_EQ(tracking.task, "tracking");
+  EXPECT_FALSE(tracking.has_goal());
+
+  NetworkLayout short_goal = layout;
+  short_goal.goal_size = 2;
+  EXPECT_THAT(std::string(short_goal.Validate().message()), HasSubstr("goal"));
+  NetworkLayout overlapping = layout;
+  overlapping.parts.back().obs_size += 1;  // into the goal
+  EXPECT_THAT(std::string(overlapping.Validate().message()), HasSubstr("where the goal starts"));
+}
+
+// Tracking is unchanged: PPO samples the actions themselves.
+TEST(SkillReuseTest, TrackingPolicySamplesItsActions) {
+  torch::manual_seed(1);
+  const NetworkLayout layout = LayoutFromWireSpec(Tracking());
+  ModSkillPolicy policy(layout, SmallConfig());
+  EXPECT_FALSE(policy->task_mode());
+  EXPECT_EQ(policy->sample_size(), layout.action_size);
+  EXPECT_EQ(policy->log_std().size(0), layout.action_size);
+  torch::NoGradGuard no_grad;
+  const torch::Tensor obs = torch::randn({4, layout.obs_size});
+  EXPECT_TRUE(torch::equal(policy->SampleMean(obs), policy->forward(obs)));
+  const torch::Tensor sample = torch::randn({4, layout.action_size});
+  EXPECT_TRUE(torch::equal(policy->ActionsFor(obs, sample), sample));
+}
+
+TEST(SkillReuseTest, SkillsComeFromAProprioceptiveTrackersExport) {
+  const SkillLibrary& skills = Skills();
+  EXPECT_EQ(skills.num_parts(), 5u);
+  EXPECT_EQ(skills.embed_dim(), 32);
+  EXPECT_EQ(skills.controller_hidden(), (std::vector<int64_t>{256, 128}));
+  EXPECT_EQ(skills.spec().controller_input, "proprioception");
+  const absl::Status fits = skills.CheckFits(Tracking(), Steer());
+  EXPECT_TRUE(fits.ok()) << fits;
+  // A proprioceptive tracker exported before the spec recorded controller_input is judged by its weights.
+  auto unrecorded = SkillLibrary::Load(ExportTracker("skill_reuse_unrecorded.pt", "5part",
+                                                     ModelConfig::ControllerInput::kProprioception, false));
+  ASSERT_TRUE(unrecorded.ok()) << unrecorded.status();
+  EXPECT_TRUE(unrecorded->CheckFits(Tracking(), Steer()).ok());
+}
+
+// (iii) What is refused as skills, each error naming the file.
+TEST(SkillReuseTest, FilesThatAreNotReusableSkillsAreClearErrors) {
+  const std::string garbage = TmpPath("skill_reuse_garbage.pt");
+  ASSERT_TRUE(WriteFileAtomically(garbage, "not a zip archive").ok());
+  auto not_policy = SkillLibrary::Load(garbage);
+  EXPECT_EQ(not_policy.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(std::string(not_policy.status().message()), HasSubstr(garbage));
+  EXPECT_THAT(std::string(not_policy.status().message()), HasSubstr("not a policy file"));
+
+  const std::string affine = TmpPath("skill_reuse_affine.pt");
+  ASSERT_TRUE(SaveAffinePolicy(affine, PolicySpecForEnv(SpecsOf("5part").env), {}, {}).ok());
+  EXPECT_THAT(std::string(SkillLibrary::Load(affine).status().message()), HasSubstr("no part<p>_controller"));
+
+  auto part_obs = SkillLibrary::Load(
+      ExportTracker("skill_reuse_part_obs.pt", "5part", ModelConfig::ControllerInput::kPartObservation));
+  ASSERT_TRUE(part_obs.ok()) << part_obs.status();
+  const absl::Status reads_reference = part_obs->CheckFits(Tracking(), Steer());
+  EXPECT_EQ(reads_reference.code(), absl::StatusCode::kFailedPrecondition);
+  EXPECT_THAT(std::string(reads_reference.message()), HasSubstr("part_obs"));
+  EXPECT_THAT(std::string(reads_reference.message()), HasSubstr("--controller_input proprioception"));
+  EXPECT_THAT(std::string(reads_reference.message()), HasSubstr("skill_reuse_part_obs.pt"));
+
+  auto three_parts = SkillLibrary::Load(ExportTracker("skill_reuse_3part.pt", "3part"));
+  ASSERT_TRUE(three_parts.ok()) << three_parts.status();
+  const absl::Status other_layout = three_parts->CheckFits(Tracking(), Steer());
+  EXPECT_EQ(other_layout.code(), absl::StatusCode::kFailedPrecondition);
+  EXPECT_THAT(std::string(other_layout.message()), HasSubstr("part layout 3part"));
+
+  // A task policy is not a tracker.
+  TaskNetworks steer = SteerNetworks();
+  PolicySpec spec = PolicySpecForEnv(SpecsOf("5part", TaskKind::kSteer).env);
+  spec.controller_input = "proprioception";
+  const std::string task_policy = TmpPath("skill_reuse_steer_as_skills.pt");
+  ASSERT_TRUE(ExportPolicy(steer.policy, steer.norm, spec, task_policy).ok());
+  auto not_tracker = SkillLibrary::Load(task_policy);
+  EXPECT_THAT(std::string(not_tracker.status().message()), HasSubstr("a policy for task steer"));
+}
+
+TEST(SkillReuseTest, TaskPolicyDrivesTheTrackersControllersWithZFromItsHead) {
+  torch::manual_seed(2);
+  TaskNetworks steer = SteerNetworks();
+  ModSkillPolicyImpl& policy = *steer.policy;
+  EXPECT_TRUE(policy.task_mode());
+  EXPECT_TRUE(policy.attention().is_empty());
+  EXPECT_EQ(policy.sample_size(), 5 * 32);
+  EXPECT_TRUE(torch::equal(policy.log_std(), torch::full({160}, -2.9)));
+  EXPECT_TRUE(Skills().CheckSameControllers(policy).ok());
+  for (const PartController& controller : policy.controllers()) {
+    for (const torch::Tensor& p : controller->parameters()) EXPECT_FALSE(p.requires_grad());
+  }
+  for (const torch::Tensor& p : policy.task_head()->parameters()) EXPECT_TRUE(p.requires_grad());
+  torch::NoGradGuard no_grad;
+  const torch::Tensor obs = torch::randn({6, 361});
+  const torch::Tensor z = policy.skills(obs).z;
+  EXPECT_TRUE(torch::allclose(z.norm(2, -1), torch::ones({6, 5}), 1e-5, 1e-5));
+  EXPECT_TRUE(torch::equal(policy.forward(obs), policy.ActionsFor(obs, policy.SampleMean(obs))));
+  // The goal reaches the actions only through z: with z fixed, the goal features change nothing.
+  torch::Tensor other_goal = obs.clone();
+  other_goal.slice(1, 358, 361) += 3.0;
+  EXPECT_TRUE(torch::equal(policy.ControllerActions(obs, z), policy.ControllerActions(other_goal, z)));
+  EXPECT_FALSE(torch::equal(policy.forward(obs), policy.forward(other_goal)));
+}
+
+// (i) PPO updates move the task head and leave every controller weight as the skills had it.
+TEST(SkillReuseTest, PpoUpdatesTrainTheTaskHeadAndLeaveTheSkillsFrozen) {
+  torch::manual_seed(3);
+  TaskNetworks steer = SteerNetworks();
+  ModSkillPolicyImpl& policy = *steer.policy;
+  Critic critic(361, SmallConfig().critic_hidden);
+  const std::vector<torch::Tensor> trainable = TrainableParameters(policy, *critic);
+  EXPECT_EQ(trainable.size(), policy.task_head()->parameters().size() + critic->parameters().size());
+  torch::optim::Adam optimizer(trainable, torch::optim::AdamOptions(1e-3));
+  std::vector<torch::Tensor> controllers_before, head_before = Clones(policy.task_head()->parameters());
+  for (const PartController& controller : policy.controllers()) {
+    for (const torch::Tensor& p : Clones(controller->parameters())) controllers_before.push_back(p);
+  }
+  PpoSettings settings;
+  settings.minibatch_size = 64;
+  torch::Generator generator = at::detail::createCPUGenerator(3);
+  int updates = 0;
+  for (int iteration = 0; iteration < 3; ++iteration) {
+    PpoBatch batch;
+    batch.obs = torch::randn({256, 361});
+    torch::NoGradGuard no_grad;
+    const torch::Tensor mean = policy.SampleMean(batch.obs);
+    batch.samples = mean + policy.log_std().exp() * torch::randn(mean.sizes());
+    batch.old_log_prob = ModSkillPolicyImpl::LogProb(mean, policy.log_std(), batch.samples);
+    batch.old_values = critic->forward(batch.obs);
+    batch.advantages = torch::randn({256});
+    batch.returns = torch::randn({256});
+    torch::AutoGradMode grad(true);
+    updates += UpdateWithPpo(policy, *critic, optimizer, batch, settings, generator).updates;
+  }
+  EXPECT_EQ(updates, 3 * 2 * 4);
+  std::vector<torch::Tensor> controllers_after;
+  for (const PartController& controller : policy.controllers()) {
+    for (const torch::Tensor& p : controller->parameters()) controllers_after.push_back(p);
+  }
+  EXPECT_TRUE(AllEqual(controllers_before, controllers_after)) << "the skills moved";
+  EXPECT_TRUE(Skills().CheckSameControllers(policy).ok());
+  EXPECT_FALSE(AllEqual(head_before, policy.task_head()->parameters())) << "the task head did not learn";
+}
+
+// (ii) The normalizer sees the self features as the tracker's did, and its updates leave them so.
+TEST(SkillReuseTest, TrackerStatisticsOfTheSelfFeaturesStayFrozen) {
+  torch::manual_seed(4);
+  TaskNetworks steer = SteerNetworks();
+  RunningMeanStdImpl& norm = *steer.norm;
+  auto tracker = ReadExportedPolicy(Skills().path());
+  ASSERT_TRUE(tracker.ok()) << tracker.status();
+  const torch::Tensor& tracker_mean = tracker->tensors.at("obs_mean");
+  const torch::Tensor& tracker_var = tracker->tensors.at("obs_var");
+  for (int p = 0; p < Steer().parts_size(); ++p) {
+    for (int b = 0; b < Steer().parts(p).self_obs_size(); ++b) {
+      const v1::Slice &from = Tracking().parts(p).self_obs(b), &to = Steer().parts(p).self_obs(b);
+      EXPECT_TRUE(torch::equal(norm.mean().narrow(0, to.start(), to.size()),
+                               tracker_mean.narrow(0, from.start(), from.size())));
+      EXPECT_TRUE(torch::equal(norm.var().narrow(0, to.start(), to.size()),
+                               tracker_var.narrow(0, from.start(), from.size())));
+    }
+  }
+  EXPECT_EQ(norm.frozen().sum().item<int64_t>(), 358);
+  const torch::Tensor mean_before = norm.mean().clone(), var_before = norm.var().clone();
+  for (int i = 0; i < 3; ++i) norm.Update(torch::randn({128, 361}) * 7.0 + 2.0);
+  EXPECT_TRUE(torch::equal(norm.mean().slice(0, 0, 358), mean_before.slice(0, 0, 358)));
+  EXPECT_TRUE(torch::equal(norm.var().slice(0, 0, 358), var_before.slice(0, 0, 358)));
+  EXPECT_GT((norm.mean().slice(0, 358) - mean_before.slice(0, 358)).abs().min().item<double>(), 0.5);
+  EXPECT_GT(norm.var().slice(0, 358).min().item<double>(), 10.0) << "the goal dims adapt";
+}
+
+// (iv) The exported task policy computes the C++ modules' actions from raw observations; the
+// server runs it in its task only; the evaluation rebuilds the same policy from the file.
+TEST(SkillReuseTest, ExportedTaskPolicyMatchesTheModules) {
+  torch::manual_seed(5);
+  TaskNetworks steer = SteerNetworks();
+  for (int i = 0; i < 2; ++i) steer.norm->Update(torch::randn({64, 361}) * 2.0 + 1.0);
+  PolicySpec spec = PolicySpecForEnv(SpecsOf("5part", TaskKind::kSteer).env);
+  spec.controller_input = "proprioception";
+  const std::string path = TmpPath("skill_reuse_steer.pt");
+  const absl::Status exported = ExportPolicy(steer.policy, steer.norm, spec, path);
+  ASSERT_TRUE(exported.ok()) << exported << "\n" << PolicyScriptSource(*steer.policy);
+
+  const torch::Tensor raw = torch::randn({16, 361}) * 3.0;
+  torch::NoGradGuard no_grad;
+  const torch::Tensor expected = steer.policy->forward(steer.norm->Normalize(raw));
+  torch::jit::Module script = torch::jit::load(path);
+  const torch::Tensor scripted = script.forward({raw}).toTensor();
+  ASSERT_EQ(scripted.sizes(), expected.sizes());
+  EXPECT_LT((scripted - expected).abs().max().item<float>(), 1e-5);
+
+  auto checkpoint = PolicyCheckpoint::LoadFile(path);
+  ASSERT_TRUE(checkpoint.ok()) << checkpoint.status();
+  EXPECT_EQ((*checkpoint)->spec().task, "steer");
+  EXPECT_TRUE(CheckPolicyFitsEnv((*checkpoint)->spec(), SpecsOf("5part", TaskKind::kSteer).env, "steer").ok());
+  const absl::Status in_tracking = CheckPolicyFitsEnv((*checkpoint)->spec(), SpecsOf("5part").env);
+  EXPECT_EQ(in_tracking.code(), absl::StatusCode::kFailedPrecondition);
+  EXPECT_THAT(std::string(in_tracking.message()), HasSubstr("task steer"));
+
+  auto imported = ImportTaskPolicy(path, Steer());
+  ASSERT_TRUE(imported.ok()) << imported.status();
+  EXPECT_TRUE(torch::equal(imported->policy->forward(imported->obs_norm->Normalize(raw)), expected));
+  EXPECT_THAT(std::string(ImportTaskPolicy(Skills().path(), Steer()).status().message()),
+              HasSubstr("a policy for task tracking"));
+
+  PolicySpec wrong_task = spec;
+  wrong_task.task = "reach";
+  EXPECT_THAT(std::string(ExportPolicy(steer.policy, steer.norm, wrong_task, TmpPath("unused.pt")).message()),
+              HasSubstr("task reach"));
+}
+
+TEST(SkillReuseTest, NormalizedReturnSumsTheGoalTermsOverTheEpisodeLimit) {
+  const TaskReturn steer({"speed", "facing", "energy"}, 0);
+  EXPECT_EQ(steer.episode_steps(), 300);
+  const torch::Tensor terms = torch::tensor({{0.5f, 0.25f, -0.125f}, {0.0f, 1.0f, -1.0f}});
+  const torch::Tensor goal = steer.GoalReward(terms);
+  EXPECT_DOUBLE_EQ(goal[0].item<double>(), 0.75);
+  EXPECT_DOUBLE_EQ(goal[1].item<double>(), 1.0);
+  EXPECT_DOUBLE_EQ(steer.Normalize(150.0), 0.5);
+  EXPECT_EQ(TaskReturn({"reach", "energy"}, 100).episode_steps(), 100);
+  EXPECT_TRUE(std::isnan(MeanOrNan({})));
+  EXPECT_DOUBLE_EQ(MeanOrNan({0.25, 0.75}), 0.5);
+}
+
+}  // namespace
+}  // namespace modskill::learner
