@@ -13,6 +13,8 @@
 #include "common/atomic_file.h"
 #include "common/policy/policy_checkpoint.h"
 #include "learner/evaluation.h"
+#include "learner/skill_library.h"
+#include "learner/task_evaluation.h"
 #include "learner/trainer.h"
 #include "tests/server_fixture.h"
 
@@ -324,6 +326,78 @@ TEST(LearnerTrainingTest, CollectingDuringTheUpdateLagsByOneUpdateAndLearns) {
   // The next run starts with no collection left over: a second Run continues cleanly.
   ASSERT_TRUE((*trainer)->Run().ok());
   EXPECT_EQ((*trainer)->iteration(), 24);
+  server->Shutdown(absl::Seconds(1));
+}
+
+// Skill reuse end to end: a proprioceptive tracker's policy.pt drives a steer run whose task
+// policy trains, exports with the skills unchanged inside, resumes, and is evaluated beside the
+// random-z and constant-z baselines; an unknown task is refused before any session opens.
+TEST(LearnerTrainingTest, SteerPolicyTrainsOverATrackersFrozenSkills) {
+  auto server = StartTestServer();
+  TrainerConfig tracker_config = SmallConfig({server->port()}, RunDir("skills_tracker"));
+  tracker_config.motions = {"deepmimic_walk"};
+  tracker_config.iterations = 1;
+  tracker_config.model.controller_input = ModelConfig::ControllerInput::kProprioception;
+  auto tracker = Trainer::Create(tracker_config);
+  ASSERT_TRUE(tracker.ok()) << tracker.status();
+  ASSERT_TRUE((*tracker)->Run().ok());
+  const std::string skills = tracker_config.run_dir + "/policy.pt";
+
+  const std::string dir = RunDir("steer");
+  TrainerConfig config = SmallConfig({server->port()}, dir);
+  config.motions = {"deepmimic_walk"};
+  config.task = "steer";
+  config.skills = skills;
+  config.report_every = 1;
+  auto trainer = Trainer::Create(config);
+  ASSERT_TRUE(trainer.ok()) << trainer.status();
+  EXPECT_EQ((*trainer)->spec().task(), "steer");
+  EXPECT_EQ((*trainer)->policy()->sample_size(), 5 * 32);
+  ASSERT_TRUE((*trainer)->Run().ok());
+  EXPECT_EQ((*trainer)->iteration(), 2);
+  EXPECT_TRUE(std::isfinite((*trainer)->history().back().policy_loss));
+  auto client = ConnectTo(*server);
+  EXPECT_EQ(client->GetStats()->failure_reports(), 0) << "steer episodes follow no clip";
+
+  auto library = SkillLibrary::Load(skills);
+  ASSERT_TRUE(library.ok()) << library.status();
+  auto imported = ImportTaskPolicy(dir + "/policy.pt", (*trainer)->spec());
+  ASSERT_TRUE(imported.ok()) << imported.status();
+  EXPECT_TRUE(library->CheckSameControllers(*imported->policy).ok()) << "the skills changed in training";
+
+  config.resume = true;
+  config.iterations = 1;
+  auto resumed = Trainer::Create(config);
+  ASSERT_TRUE(resumed.ok()) << resumed.status();
+  ASSERT_TRUE((*resumed)->Run().ok());
+  EXPECT_EQ((*resumed)->iteration(), 3);
+
+  TaskEvaluationOptions options;
+  options.session.set_task("steer");
+  options.session.add_motions("deepmimic_walk");
+  options.session.set_action_mode(v1::RESIDUAL);
+  options.session.set_residual_scale(static_cast<float>(config.residual_scale));
+  options.session.set_max_episode_steps(30);
+  options.episodes = 4;
+  auto report = EvaluateTaskPolicy(*client, *imported, "steer policy", options);
+  ASSERT_TRUE(report.ok()) << report.status();
+  ASSERT_EQ(report->rows.size(), 3u);
+  for (const TaskEvaluationRow& row : report->rows) {
+    EXPECT_EQ(row.episodes, 4) << row.z_source;
+    EXPECT_GE(row.mean_normalized_return, 0.0) << row.z_source;
+    EXPECT_LE(row.mean_normalized_return, 1.0) << row.z_source;
+    EXPECT_LE(row.mean_episode_length, 30.0) << row.z_source;
+  }
+  EXPECT_THAT(report->ToMarkdown(), HasSubstr("random unit z"));
+
+  TrainerConfig unknown = config;
+  unknown.task = "juggle";
+  unknown.resume = false;
+  auto refused = Trainer::Create(unknown);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(std::string(refused.status().message()), HasSubstr("--task juggle"));
+  EXPECT_THAT(std::string(refused.status().message()), HasSubstr("steer"));
   server->Shutdown(absl::Seconds(1));
 }
 
