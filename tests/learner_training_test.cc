@@ -329,6 +329,22 @@ TEST(LearnerTrainingTest, CollectingDuringTheUpdateLagsByOneUpdateAndLearns) {
   server->Shutdown(absl::Seconds(1));
 }
 
+// A task run's exported policy still holds the tracker's skills: the same controller weights and,
+// at every body's self features, the tracker's observation statistics.
+void ExpectSkillsIntact(const std::string& skills_path, const std::string& policy_path, const v1::EnvSpec& tracking,
+                        const v1::EnvSpec& task) {
+  auto library = SkillLibrary::Load(skills_path);
+  ASSERT_TRUE(library.ok()) << library.status();
+  auto imported = ImportTaskPolicy(policy_path, task);
+  ASSERT_TRUE(imported.ok()) << imported.status();
+  EXPECT_TRUE(library->CheckSameControllers(*imported->policy).ok()) << "the skills changed in training";
+  RunningMeanStd tracker_statistics(task.obs_size());
+  ASSERT_TRUE(library->LoadSelfStatistics(tracking, task, *tracker_statistics).ok());
+  const torch::Tensor self = tracker_statistics->frozen();
+  EXPECT_TRUE(torch::equal(imported->obs_norm->mean().masked_select(self), tracker_statistics->mean().masked_select(self)));
+  EXPECT_TRUE(torch::equal(imported->obs_norm->var().masked_select(self), tracker_statistics->var().masked_select(self)));
+}
+
 // Skill reuse end to end: a proprioceptive tracker's policy.pt drives a steer run whose task
 // policy trains, exports with the skills unchanged inside, resumes, and is evaluated beside the
 // random-z and constant-z baselines; an unknown task is refused before any session opens.
@@ -359,11 +375,9 @@ TEST(LearnerTrainingTest, SteerPolicyTrainsOverATrackersFrozenSkills) {
   auto client = ConnectTo(*server);
   EXPECT_EQ(client->GetStats()->failure_reports(), 0) << "steer episodes follow no clip";
 
-  auto library = SkillLibrary::Load(skills);
-  ASSERT_TRUE(library.ok()) << library.status();
-  auto imported = ImportTaskPolicy(dir + "/policy.pt", (*trainer)->spec());
-  ASSERT_TRUE(imported.ok()) << imported.status();
-  EXPECT_TRUE(library->CheckSameControllers(*imported->policy).ok()) << "the skills changed in training";
+  auto tracking = client->Describe("5part");
+  ASSERT_TRUE(tracking.ok()) << tracking.status();
+  ExpectSkillsIntact(skills, dir + "/policy.pt", *tracking, (*trainer)->spec());
 
   config.resume = true;
   config.iterations = 1;
@@ -371,6 +385,9 @@ TEST(LearnerTrainingTest, SteerPolicyTrainsOverATrackersFrozenSkills) {
   ASSERT_TRUE(resumed.ok()) << resumed.status();
   ASSERT_TRUE((*resumed)->Run().ok());
   EXPECT_EQ((*resumed)->iteration(), 3);
+  ExpectSkillsIntact(skills, dir + "/policy.pt", *tracking, (*trainer)->spec());
+  auto imported = ImportTaskPolicy(dir + "/policy.pt", (*trainer)->spec());
+  ASSERT_TRUE(imported.ok()) << imported.status();
 
   TaskEvaluationOptions options;
   options.session.set_task("steer");
