@@ -2,8 +2,9 @@
 """Plots a training run's learning curve from its progress.csv.
 
 modskill-learner writes one row per iteration to RUN_DIR/progress.csv (and the same scalars
-as TensorBoard events). This draws mean episode return, mean per-step task reward and mean
-episode length against environment steps, one line per run, to a PNG.
+as TensorBoard events). This draws mean episode return, mean per-step task reward (the
+normalized return in task runs, which have that column) and mean episode length against
+environment steps, one line per run, to a PNG.
 
     /usr/bin/python3 plot_learning_curve.py runs/walk/progress.csv runs/library/progress.csv --out curve.png
 """
@@ -36,13 +37,16 @@ def main():
     if len(labels) != len(args.csv):
         raise SystemExit("error: --labels needs one label per file")
     figure, axes = plt.subplots(1, 3, figsize=(15, 4))
-    for path, label in zip(args.csv, labels):
-        run = read(path)
+    runs = [read(path) for path in args.csv]
+    task_runs = all("normalized_return" in run for run in runs)
+    middle = "normalized_return" if task_runs else "mean_task_reward"
+    for run, label in zip(runs, labels):
         steps = [s / 1e6 for s in run["env_steps"]]
         axes[0].plot(steps, run["episode_return"], label=label)
-        axes[1].plot(steps, run["mean_task_reward"], label=label)
+        axes[1].plot(steps, run[middle], label=label)
         axes[2].plot(steps, run["episode_length"], label=label)
-    for axis, title in zip(axes, ["mean episode return", "mean task reward per step", "mean episode length (steps)"]):
+    middle_title = "normalized return (episodes ended)" if task_runs else "mean task reward per step"
+    for axis, title in zip(axes, ["mean episode return", middle_title, "mean episode length (steps)"]):
         axis.set_title(title)
         axis.set_xlabel("env steps (millions)")
         axis.grid(alpha=0.3)

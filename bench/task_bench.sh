@@ -1,0 +1,74 @@
+#!/usr/bin/env bash
+# Skill reuse benchmark (issue 13): trains one high-level task policy per task over the same
+# frozen tracker skills, side by side (each against its own server, same seed, same wall-clock
+# budget), then evaluates each beside the same skills driven by random z and by a constant z
+# (modskill-learner --eval --task T --task_baselines), and writes a table and the curves.
+#
+#   bench/task_bench.sh --out DIR --skills TRACKER/policy.pt --minutes M [--motions a,b]
+#       [--resume] [--eval_episodes N] NAME="learner flags" [NAME=...]
+#
+# Every variant's flags must name its task, e.g.
+#   bench/task_bench.sh --out runs/tasks --skills runs/skills/proprio/policy.pt --minutes 30 \
+#       --motions deepmimic_walk,deepmimic_jog,deepmimic_run \
+#       steer="--task steer" reach="--task reach" strike="--task strike"
+set -euo pipefail
+cd "$(dirname "$0")/.."
+BUILD="${MODSKILL_BUILD_DIR:-build}"
+OUT="" SKILLS="" MINUTES=30 MOTIONS="" RESUME="" EPISODES=64
+VARIANTS=()
+while (($#)); do
+  case "$1" in
+    --out) OUT="$2"; shift 2 ;;
+    --skills) SKILLS="$2"; shift 2 ;;
+    --minutes) MINUTES="$2"; shift 2 ;;
+    --motions) MOTIONS="$2"; shift 2 ;;
+    --eval_episodes) EPISODES="$2"; shift 2 ;;
+    --resume) RESUME="--resume"; shift ;;
+    -h|--help) sed -n 2,13p "$0"; exit 0 ;;
+    *=*) VARIANTS+=("$1"); shift ;;
+    *) echo "error: unknown argument '$1' (see --help)" >&2; exit 2 ;;
+  esac
+done
+[ -n "$OUT" ] || { echo "error: --out DIR is required" >&2; exit 2; }
+[ -f "$SKILLS" ] || { echo "error: --skills: no file '$SKILLS' (a tracker's policy.pt, --controller_input proprioception)" >&2; exit 2; }
+((${#VARIANTS[@]})) || { echo "error: give at least one NAME=\"--task T ...\" variant" >&2; exit 2; }
+mkdir -p "$OUT"
+free_port() { /usr/bin/python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])'; }
+
+SHARED=""
+((${#VARIANTS[@]} > 1)) && SHARED="--update_threads 1"
+PIDS=() NAMES=() PORTS=() SERVERS=() FLAGS=()
+cleanup() { for pid in "${SERVERS[@]}"; do kill -TERM "$pid" 2>/dev/null || true; done; }
+trap cleanup EXIT
+for variant in "${VARIANTS[@]}"; do
+  name="${variant%%=*}" flags="${variant#*=}"
+  port=$(free_port)
+  "$BUILD/server/modskill-server" --port "$port" --threads 1 --no_generative > "$OUT/$name.server.log" 2>&1 &
+  SERVERS+=($!)
+  NAMES+=("$name") PORTS+=("$port") FLAGS+=("$flags")
+  # shellcheck disable=SC2086  # the variant's flags are words on purpose
+  "$BUILD/learner/modskill-learner" --servers "127.0.0.1:$port" --run_dir "$OUT/$name" --preset small \
+      --skills "$SKILLS" --iterations 1000000 --time_budget_min "$MINUTES" --seed 1 --checkpoint_every 20 \
+      ${MOTIONS:+--motions "$MOTIONS"} $RESUME $SHARED $flags > "$OUT/$name.train.log" 2>&1 &
+  PIDS+=($!)
+done
+status=0
+for i in "${!PIDS[@]}"; do
+  wait "${PIDS[$i]}" || { echo "error: variant ${NAMES[$i]} failed; see $OUT/${NAMES[$i]}.train.log" >&2; status=1; }
+done
+((status == 0)) || exit 1
+
+# Evaluation: the task policy, random z and constant z over the same frozen skills, one variant
+# after the other (the servers are idle now).
+for i in "${!NAMES[@]}"; do
+  name="${NAMES[$i]}"
+  task=$(sed -n 's/.*--task[ =]\([a-z_]*\).*/\1/p' <<< "${FLAGS[$i]}")
+  "$BUILD/learner/modskill-learner" --eval --task "$task" --checkpoint "$OUT/$name/policy.pt" --skills "$SKILLS" \
+      --servers "127.0.0.1:${PORTS[$i]}" --task_baselines --eval_episodes "$EPISODES" --seed 7 \
+      ${MOTIONS:+--motions "$MOTIONS"} --eval_out "$OUT/$name/eval" > "$OUT/$name/eval.log" 2>&1
+  { echo "### $name"; cat "$OUT/$name/eval/eval.md"; echo; } 
+done | tee "$OUT/table.md"
+CSVS=()
+for name in "${NAMES[@]}"; do CSVS+=("$OUT/$name/progress.csv"); done
+/usr/bin/python3 client/python/examples/plot_learning_curve.py "${CSVS[@]}" --out "$OUT/curves.png"
+echo "wrote $OUT/table.md and $OUT/curves.png"
