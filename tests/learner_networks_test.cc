@@ -31,35 +31,13 @@
 #include "server/core/sim/physics_options.h"
 #include "server/service/discriminator_scorer.h"
 #include "server/service/proto_conversions.h"
+#include "tests/env_specs.h"
 
 namespace modskill::learner {
 namespace {
 
 using ::testing::HasSubstr;
 
-// The env spec of the shipped humanoid with the named part layout, built once per layout.
-// The server's env spec for a layout, in memory and as the wire describes it to the learner.
-struct Specs {
-  EnvSpec env;
-  v1::EnvSpec wire;
-};
-
-const Specs& SpecsOf(const std::string& layout_name) {
-  static std::map<std::string, Specs>* specs = new std::map<std::string, Specs>();
-  auto it = specs->find(layout_name);
-  if (it != specs->end()) return it->second;
-  auto humanoid_spec = HumanoidSpec::LoadDefault();
-  EXPECT_TRUE(humanoid_spec.ok()) << humanoid_spec.status();
-  auto humanoid = HumanoidModel::Create(*humanoid_spec, PhysicsOptions());
-  EXPECT_TRUE(humanoid.ok()) << humanoid.status();
-  auto catalog = PartLayoutCatalog::LoadDefault(*humanoid_spec);
-  EXPECT_TRUE(catalog.ok()) << catalog.status();
-  auto layout = catalog->Get(layout_name);
-  EXPECT_TRUE(layout.ok()) << layout.status();
-  Specs made{MakeEnvSpec(**humanoid, *layout), {}};
-  ToProto(made.env, **humanoid, &made.wire);
-  return specs->emplace(layout_name, std::move(made)).first->second;
-}
 
 const EnvSpec& Spec(const std::string& layout_name) { return SpecsOf(layout_name).env; }
 

@@ -34,34 +34,13 @@
 #include "server/core/sim/part_layout.h"
 #include "server/core/sim/physics_options.h"
 #include "server/service/proto_conversions.h"
+#include "tests/env_specs.h"
 
 namespace modskill::learner {
 namespace {
 
 using ::testing::HasSubstr;
 
-struct Specs {
-  EnvSpec env;
-  v1::EnvSpec wire;
-};
-
-// The server's env spec for a part layout and task, in memory and on the wire.
-const Specs& SpecsOf(const std::string& layout_name, TaskKind task = TaskKind::kTracking) {
-  static std::map<std::pair<std::string, TaskKind>, Specs>* specs = new std::map<std::pair<std::string, TaskKind>, Specs>();
-  auto it = specs->find({layout_name, task});
-  if (it != specs->end()) return it->second;
-  auto humanoid_spec = HumanoidSpec::LoadDefault();
-  EXPECT_TRUE(humanoid_spec.ok()) << humanoid_spec.status();
-  auto humanoid = HumanoidModel::Create(*humanoid_spec, PhysicsOptions());
-  EXPECT_TRUE(humanoid.ok()) << humanoid.status();
-  auto catalog = PartLayoutCatalog::LoadDefault(*humanoid_spec);
-  EXPECT_TRUE(catalog.ok()) << catalog.status();
-  auto layout = catalog->Get(layout_name);
-  EXPECT_TRUE(layout.ok()) << layout.status();
-  Specs made{MakeEnvSpec(**humanoid, *layout, task), {}};
-  ToProto(made.env, **humanoid, &made.wire);
-  return specs->emplace(std::make_pair(layout_name, task), std::move(made)).first->second;
-}
 
 const v1::EnvSpec& Tracking(const std::string& layout = "5part") { return SpecsOf(layout).wire; }
 const v1::EnvSpec& Steer(const std::string& layout = "5part") { return SpecsOf(layout, TaskKind::kSteer).wire; }

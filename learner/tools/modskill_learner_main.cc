@@ -136,6 +136,15 @@ void WriteEvalPage(RolloutViewerRecorder& page, std::string title, const std::st
 }
 
 // --eval_out, or the checkpoint's directory.
+// --eval talks to the first of --servers.
+absl::StatusOr<std::unique_ptr<SimulationClient>> ConnectToFirstServer(const std::string& token) {
+  ClientOptions options;
+  options.server = absl::GetFlag(FLAGS_servers)[0];
+  options.token = token;
+  options.tls_ca_file = absl::GetFlag(FLAGS_tls_ca);
+  return SimulationClient::Connect(options);
+}
+
 std::string EvalOutDir(const std::string& checkpoint) {
   std::string out_dir = absl::GetFlag(FLAGS_eval_out);
   if (out_dir.empty()) out_dir = std::filesystem::path(checkpoint).parent_path().string();
@@ -163,18 +172,14 @@ int RunEvaluation(const std::string& token) {
     return Fail("--eval needs --checkpoint (a run's policy.pt) or --baseline, not both", 2);
   }
   if (absl::GetFlag(FLAGS_servers).empty()) return Fail("--eval needs --servers", 2);
-  ClientOptions options;
-  options.server = absl::GetFlag(FLAGS_servers)[0];
-  options.token = token;
-  options.tls_ca_file = absl::GetFlag(FLAGS_tls_ca);
-  auto client = SimulationClient::Connect(options);
+  auto client = ConnectToFirstServer(token);
   if (!client.ok()) return Fail(std::string(client.status().message()));
   auto spec = (*client)->Describe();
   if (!spec.ok()) return Fail(std::string(spec.status().message()));
   auto reference_policy = OpenLoopReferencePolicy(*spec);
   if (!reference_policy.ok()) return Fail(std::string(reference_policy.status().message()));
   const std::vector<std::string> clips = absl::GetFlag(FLAGS_clips);
-  LogLine("evaluating the open-loop reference on %s", options.server);
+  LogLine("evaluating the open-loop reference on %s", (*client)->server());
   auto baseline = Evaluate(**client, "open-loop reference", *reference_policy, clips);
   if (!baseline.ok()) return Fail(std::string(baseline.status().message()));
   std::string markdown, json;
@@ -185,7 +190,7 @@ int RunEvaluation(const std::string& token) {
   } else {
     auto bytes = ReadFileToString(checkpoint, size_t{2} << 30);
     if (!bytes.ok()) return Fail(absl::StrCat("--checkpoint: ", bytes.status().message()));
-    LogLine("evaluating %s on %s", checkpoint, options.server);
+    LogLine("evaluating %s on %s", checkpoint, (*client)->server());
     page = EvalPageRecorder(**client, *spec);
     auto report = Evaluate(**client, checkpoint, *bytes, clips,
                            page ? [&page](const v1::RolloutFrame& frame) { page->Add(frame); }
@@ -252,11 +257,7 @@ int RunTaskEvaluation(const std::string& token) {
     return Fail("--baseline: the open-loop reference baselines a tracker; with --task use --task_baselines", 2);
   }
   if (absl::GetFlag(FLAGS_servers).empty()) return Fail("--eval needs --servers", 2);
-  ClientOptions options;
-  options.server = absl::GetFlag(FLAGS_servers)[0];
-  options.token = token;
-  options.tls_ca_file = absl::GetFlag(FLAGS_tls_ca);
-  auto client = SimulationClient::Connect(options);
+  auto client = ConnectToFirstServer(token);
   if (!client.ok()) return Fail(std::string(client.status().message()));
   auto report = EvaluateTaskFromFlags(**client, checkpoint);
   if (!report.ok()) return Fail(std::string(report.status().message()));
