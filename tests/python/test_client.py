@@ -119,6 +119,24 @@ class ClientTest(unittest.TestCase):
         self.assertEqual(len(spec.reward_terms), 5)
         self.assertEqual(spec.num_motions, 20)
 
+    def test_task_session(self):
+        with self.client.session(2, seed=3, motions=["deepmimic_walk"], action_mode="residual", task="steer",
+                                 task_settings={"min_speed": 1.0, "max_speed": 1.5}) as session:
+            spec = session.spec
+            self.assertEqual(spec.task, "steer")
+            self.assertEqual(spec.obs_size, spec.self_obs_size + 3)
+            self.assertEqual(session.initial.obs.shape, (2, spec.obs_size))
+            speeds = session.initial.obs[:, spec.obs_size - 1]
+            self.assertTrue(np.all((speeds >= 1.0) & (speeds <= 1.5)), speeds)
+            result = session.step(np.zeros((2, spec.action_size), np.float32))
+            self.assertEqual(result.reward_terms.shape, (2, 3))
+            self.assertEqual(spec.goal_obs, slice(spec.self_obs_size, spec.obs_size))
+        self.assertEqual(self.client.describe().tasks["strike"], (15, ("strike", "energy")))
+        with self.assertRaises(modskill.ServerError) as caught:
+            self.client.session(2, task="sterr")
+        self.assertEqual(caught.exception.code, grpc.StatusCode.INVALID_ARGUMENT)
+        self.assertIn("sterr", caught.exception.message)
+
     def test_describe_other_layout_and_unknown_layout(self):
         spec = self.client.describe("3part")
         self.assertEqual(spec.part_layout, "3part")

@@ -303,7 +303,8 @@ class Client:
                 termination: Union[str, int] = "training", amp_obs: Union[str, int] = "full", *,
                 termination_distance: float = 0.0, max_episode_steps: int = 0,
                 action_mode: Union[str, int] = "absolute", residual_scale: float = 0.0,
-                termination_bodies: Union[str, int] = "all") -> "Session":
+                termination_bodies: Union[str, int] = "all", task: str = "",
+                task_settings: Optional[Mapping[str, float]] = None) -> "Session":
         """Opens a simulation session of ``num_envs`` envs and returns it once the server has
         reset them (``Session.initial`` holds the first observations).
 
@@ -321,6 +322,10 @@ class Client:
             pose of the next frame + residual_scale * scale * a: zero actions track open loop).
           residual_scale: residual mode only; 0: the server's default (0.5).
           termination_bodies: "all" or "no_feet" (training termination ignores ankles and toes).
+          task: "" or "tracking", or a task env ``describe().tasks`` lists ("steer", "reach",
+            "strike", "vr_tracking"): observations are the self features then the goal.
+          task_settings: e.g. {"min_speed": 1.0, "max_speed": 2.0, "min_goal_interval_s": 2,
+            "max_goal_interval_s": 5}; a missing key keeps the server's default.
 
         Use it as a context manager (or call ``close()``) so that the server frees the envs.
         """
@@ -334,7 +339,8 @@ class Client:
                                   action_mode=_enum(action_mode, _ACTION_MODE, "action_mode"),
                                   residual_scale=residual_scale,
                                   termination_bodies=_enum(termination_bodies, _TERMINATION_BODIES,
-                                                           "termination_bodies"))
+                                                           "termination_bodies"),
+                                  task=task, task_settings=pb.TaskSettings(**dict(task_settings or {})))
         session = Session(self, config)
         self._sessions.add(session)
         return session

@@ -94,6 +94,11 @@ class EnvSpec:
     # One per body (body_names order), for viewers (modskill.viewer); empty from a server older
     # than the viewer.
     body_geometry: Tuple[BodyGeometry, ...] = dataclasses.field(repr=False, compare=False)
+    # The session's task ("tracking", "steer", ...); in a task env obs is the self features then
+    # the goal, obs[goal_obs]. ``tasks``: what Describe offers, name -> (goal size, reward terms).
+    task: str = "tracking"
+    goal_obs: slice = dataclasses.field(default_factory=lambda: slice(0, 0))
+    tasks: Dict[str, Tuple[int, Tuple[str, ...]]] = dataclasses.field(default_factory=dict, compare=False)
 
     @classmethod
     def from_proto(cls, spec: pb.EnvSpec) -> "EnvSpec":
@@ -126,6 +131,9 @@ class EnvSpec:
             action_offset=np.array(spec.action_offset, dtype=np.float32),
             action_scale=np.array(spec.action_scale, dtype=np.float32),
             body_geometry=tuple(BodyGeometry.from_proto(g) for g in spec.body_geometry),
+            task=spec.task or "tracking",
+            goal_obs=slice(spec.goal_obs.start, spec.goal_obs.start + spec.goal_obs.size),
+            tasks={t.name: (t.goal_size, tuple(t.reward_terms)) for t in spec.tasks},
         )
 
     @property
