@@ -154,8 +154,7 @@ absl::StatusOr<TaskEvaluationReport> EvaluateTaskPolicy(SimulationClient& client
   TaskEvaluationReport report;
   report.task = policy.layout().task;
   report.checkpoint = checkpoint_name;
-  report.episode_steps = options.session.max_episode_steps() > 0 ? options.session.max_episode_steps()
-                                                                 : kDefaultTaskEpisodeSteps;
+  report.episode_steps = TaskEpisodeSteps(options.session.max_episode_steps());
   torch::Tensor z_sum = torch::zeros({parts, embed});
   auto trained = RunEpisodes(client, imported, options, "task policy (deterministic)",
                              [&](const torch::Tensor& obs) { return policy.skills(obs).z; }, &z_sum);

@@ -5,7 +5,7 @@
 namespace modskill::learner {
 
 TaskReturn::TaskReturn(const std::vector<std::string>& reward_terms, int max_episode_steps)
-    : episode_steps_(max_episode_steps > 0 ? max_episode_steps : kDefaultTaskEpisodeSteps) {
+    : episode_steps_(TaskEpisodeSteps(max_episode_steps)) {
   std::vector<double> goal;
   for (const std::string& term : reward_terms) goal.push_back(term == "energy" ? 0.0 : 1.0);
   goal_terms_ = torch::tensor(goal, torch::kFloat64);

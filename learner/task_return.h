@@ -10,10 +10,9 @@
 
 #include <torch/torch.h>
 
-namespace modskill::learner {
+#include "common/policy/task_episode.h"
 
-// SessionConfig.max_episode_steps 0 in a task session: 300 steps (modskill.proto).
-inline constexpr int kDefaultTaskEpisodeSteps = 300;
+namespace modskill::learner {
 
 class TaskReturn {
  public:

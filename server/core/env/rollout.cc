@@ -63,8 +63,9 @@ ClipRolloutMetrics Measure(const Trajectory& t, const std::string& name, bool su
 // How many steps a rollout of `clip` could last: the step limit, or the clip's length in tracking.
 double PossibleSteps(const RolloutOptions& options, const MotionClip& clip) {
   const bool goal_task = IsGoalTask(options.task);
-  int steps = goal_task ? kDefaultTaskEpisodeSteps : clip.num_frames - 1;
-  if (options.max_steps_per_clip > 0) steps = goal_task ? options.max_steps_per_clip : std::min(steps, options.max_steps_per_clip);
+  if (goal_task) return TaskEpisodeSteps(options.max_steps_per_clip);
+  int steps = clip.num_frames - 1;
+  if (options.max_steps_per_clip > 0) steps = std::min(steps, options.max_steps_per_clip);
   return std::max(1, steps);
 }
 

@@ -19,7 +19,7 @@ struct RolloutOptions {
   TerminationMode termination = TerminationMode::kEvaluation;
   double termination_distance = 0.5;  // m
   ActionMapping action;               // the one the policy was trained with
-  int max_steps_per_clip = 0;         // 0: the clip's length (goal tasks: kDefaultTaskEpisodeSteps)
+  int max_steps_per_clip = 0;         // 0: the clip's length (goal tasks: TaskEpisodeSteps)
   int num_threads = 1;
   PhysicsOptions physics;
   // A task env instead of tracking: each clip gives the start state (and the base pose of

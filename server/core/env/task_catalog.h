@@ -11,6 +11,7 @@
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
+#include "common/policy/task_episode.h"
 
 namespace modskill {
 
@@ -51,9 +52,8 @@ struct TaskSettings {
   absl::Status Validate() const;
 };
 
-// Steps a task episode lasts at most when the session leaves max_episode_steps at 0 (10 s at
-// 30 Hz); tracking and VR tracking run to the clip's end instead.
-inline constexpr int kDefaultTaskEpisodeSteps = 300;
+// Goal tasks' step limit: TaskEpisodeSteps (common/policy/task_episode.h); tracking and VR
+// tracking run to the clip's end instead.
 
 }  // namespace modskill
 

@@ -104,9 +104,8 @@ void TrackingEnv::Step(const float* action, EnvRow row) {
   if (goal_task_ != nullptr) {
     ScoreGoalTask(terms, row);
     AddEnergyAndSum(power, terms, row);
-    const int limit = config.max_episode_steps > 0 ? config.max_episode_steps : kDefaultTaskEpisodeSteps;
     const bool failed = goal_task_->Failed(data_) || (episode_steps_ > 1 && context_->fall_detector->Fallen(data_, sim_));
-    FinishStep(failed, episode_steps_ >= limit, row);
+    FinishStep(failed, episode_steps_ >= TaskEpisodeSteps(config.max_episode_steps), row);
     return;
   }
   const TrackingErrors errors = ScoreTracking(terms, row);

@@ -45,7 +45,7 @@ struct TrackingEnvConfig {
   TerminationBodies termination_bodies = TerminationBodies::kAll;  // kTraining only
   ActionMapping action;
   ImitationRewardConfig reward;
-  int max_episode_steps = 0;  // 0: until the clip ends (goal tasks: kDefaultTaskEpisodeSteps)
+  int max_episode_steps = 0;  // 0: until the clip ends (goal tasks: TaskEpisodeSteps)
   TaskKind task = TaskKind::kTracking;
   TaskSettings task_settings;
   bool random_start_frame = true;
