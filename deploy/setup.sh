@@ -18,6 +18,7 @@ PACKAGES=(
   python3-venv python3-pip python3-setuptools python3-wheel  # pip install ./client/python, offline
   libjs-three  # three.js, inlined into the HTML viewer pages (common/viewer)
   chromium     # tests/viewer: the viewer page in headless Chromium
+  python3-yaml  # tests/k8s: deploy/k8s/check_manifests.py reads the Kubernetes manifests
 )
 
 missing=()
