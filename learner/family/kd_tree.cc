@@ -110,22 +110,47 @@ std::vector<Neighbor> KdTree::WithinRadius(absl::Span<const double> point, doubl
 
 std::vector<Neighbor> KdTree::Nearest(absl::Span<const double> point, int k) const {
   std::priority_queue<std::pair<double, int64_t>> best;  // max-heap of (d^2, id), size <= k
-  std::vector<std::pair<int, double>> stack;              // (node, a lower bound of its d^2)
-  if (root_ >= 0 && k > 0) stack.push_back({root_, 0.0});
+  // Depth-first, near side first. Each pending subtree carries a lower bound of its squared
+  // distance built from the per-axis offsets of the splits crossed to reach it (Arya and
+  // Mount's incremental distance), which prunes far better in 4-8 dims than the one-axis gap.
+  struct Pending {
+    int node;
+    double bound2;
+  };
+  std::vector<Pending> stack;
+  std::vector<double> offsets;  // [stack entry, dims]: the per-axis offsets of each entry
+  if (root_ >= 0 && k > 0) {
+    stack.push_back({root_, 0.0});
+    offsets.assign(dims_, 0.0);
+  }
+  const auto full = [&] { return static_cast<int>(best.size()) == k; };
+  std::vector<double> off(dims_);
   while (!stack.empty()) {
-    const auto [n, bound2] = stack.back();
+    const Pending top = stack.back();
+    std::copy(offsets.end() - dims_, offsets.end(), off.begin());
     stack.pop_back();
-    if (static_cast<int>(best.size()) == k && bound2 > best.top().first) continue;
-    const Node& node = nodes_[n];
-    const double d2 = Distance2(n, point);
-    if (!node.removed && (static_cast<int>(best.size()) < k || d2 < best.top().first)) {
+    offsets.resize(offsets.size() - dims_);
+    if (full() && top.bound2 > best.top().first) continue;
+    const Node& node = nodes_[top.node];
+    const double d2 = Distance2(top.node, point);
+    if (!node.removed && (!full() || d2 < best.top().first)) {
       best.push({d2, node.id});
       if (static_cast<int>(best.size()) > k) best.pop();
     }
-    const double diff = point[node.axis] - Coords(n)[node.axis];
+    const double diff = point[node.axis] - Coords(top.node)[node.axis];
     const int near = diff < 0 ? node.left : node.right, far = diff < 0 ? node.right : node.left;
-    if (far >= 0) stack.push_back({far, std::max(bound2, diff * diff)});
-    if (near >= 0) stack.push_back({near, bound2});  // popped first: tightens `best` early
+    if (far >= 0) {
+      const double far_bound2 = top.bound2 - off[node.axis] * off[node.axis] + diff * diff;
+      if (!full() || far_bound2 <= best.top().first) {
+        stack.push_back({far, far_bound2});
+        offsets.insert(offsets.end(), off.begin(), off.end());
+        offsets[offsets.size() - dims_ + node.axis] = diff;
+      }
+    }
+    if (near >= 0) {  // pushed last, popped first: tightens `best` early
+      stack.push_back({near, top.bound2});
+      offsets.insert(offsets.end(), off.begin(), off.end());
+    }
   }
   std::vector<Neighbor> out(best.size());
   for (int i = static_cast<int>(best.size()) - 1; i >= 0; --i, best.pop()) {
