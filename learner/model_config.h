@@ -35,6 +35,13 @@ struct ModelConfig {
   // one z per part (paper: {2048, 1024, 512}), and its fixed Gaussian log sigma in z space.
   std::vector<int64_t> task_hidden;
   double task_log_std = -2.9;
+  // Skill reuse over a prior (PULSE's and CALM's residual over a learned prior): where the task
+  // observes its base motion as a tracker observes a reference (steer, reach, strike), the
+  // tracker's frozen skill attention maps it to z_prior, and the task head's output is a
+  // displacement: z = normalize(z_prior + task head). A zero displacement plays the base motion
+  // with the tracker's own skills; exploration starts from there. Off: z = normalize(task head),
+  // the paper's high level.
+  bool task_skill_prior = true;
 
   // "paper": attention {256} -> 64, controllers {2048,1536,1024,512}, critic {2048,1536,1024,512},
   //          discriminator {1024,512}, task head {2048,1024,512}.
@@ -60,7 +67,8 @@ struct NetworkLayout {
   int64_t obs_size = 0, action_size = 0, amp_obs_size = 0;
   std::vector<PartSlices> parts;  // contiguous, in order; obs and action slices each tile [0, size)
   // The env's task (EnvSpec.task; "tracking" where the server sends none). In a task env the
-  // parts' obs slices hold their bodies' self features only and the goal follows them:
+  // goal follows the parts' obs slices (which hold their bodies' self features, and in steer,
+  // reach and strike also the anchored base motion's reference features, as in tracking):
   // obs = [parts | goal], goal = [goal_start, goal_start + goal_size); goal_size 0 in tracking.
   std::string task = "tracking";
   int64_t goal_start = 0, goal_size = 0;

@@ -4,6 +4,18 @@
 #include <string>
 
 namespace modskill::learner {
+namespace {
+
+// Whether the parts observe a reference beside their self features (tracking, and the goal tasks'
+// anchored base motion), so that a tracker's attention can read them.
+bool PartsObserveAReference(const NetworkLayout& layout) {
+  for (const PartSlices& part : layout.parts) {
+    if (part.self_obs_size() != part.obs_size) return true;
+  }
+  return false;
+}
+
+}  // namespace
 
 ModSkillPolicyImpl::ModSkillPolicyImpl(const NetworkLayout& layout, const ModelConfig& config)
     : layout_(layout), config_(config) {
@@ -18,6 +30,15 @@ ModSkillPolicyImpl::ModSkillPolicyImpl(const NetworkLayout& layout, const ModelC
                 "proprioception)");
     task_head_ = register_module("task_head", Mlp(layout.obs_size, config.task_hidden, num_parts * embed,
                                                   Activation::kElu));
+    if (config.task_skill_prior && PartsObserveAReference(layout)) {
+      // The tracker's attention (SkillLibrary loads and freezes it). The head starts near zero,
+      // so the first policy plays the base motion with the tracker's skills.
+      attention_ = register_module("attention", SkillAttention(layout, config));
+      torch::NoGradGuard no_grad;
+      const auto& last = task_head_->layers().back();
+      last->weight.mul_(0.01);
+      last->bias.zero_();
+    }
   } else {
     // SkillAttention validates the layout.
     attention_ = register_module("attention", SkillAttention(layout, config));
@@ -54,10 +75,14 @@ int64_t ModSkillPolicyImpl::sample_size() const {
 
 SkillAttentionOutput ModSkillPolicyImpl::skills(const torch::Tensor& normalized_obs) {
   if (!task_mode()) return attention_->forward(normalized_obs);
+  return {TaskZ(normalized_obs, task_head_->forward(normalized_obs)), torch::Tensor()};
+}
+
+torch::Tensor ModSkillPolicyImpl::TaskZ(const torch::Tensor& normalized_obs, const torch::Tensor& sample) {
   const int64_t num_parts = static_cast<int64_t>(layout_.parts.size());
-  return {SkillAttentionImpl::NormalizeToSphere(
-              task_head_->forward(normalized_obs).view({-1, num_parts, config_.embed_dim})),
-          torch::Tensor()};
+  torch::Tensor z = sample.view({-1, num_parts, config_.embed_dim});
+  if (uses_skill_prior()) z = attention_->forward(normalized_obs).z + z;
+  return SkillAttentionImpl::NormalizeToSphere(z);
 }
 
 torch::Tensor ModSkillPolicyImpl::forward(const torch::Tensor& normalized_obs) {
@@ -70,9 +95,7 @@ torch::Tensor ModSkillPolicyImpl::SampleMean(const torch::Tensor& normalized_obs
 
 torch::Tensor ModSkillPolicyImpl::ActionsFor(const torch::Tensor& normalized_obs, const torch::Tensor& sample) {
   if (!task_mode()) return sample;
-  const int64_t num_parts = static_cast<int64_t>(layout_.parts.size());
-  return ControllerActions(normalized_obs,
-                           SkillAttentionImpl::NormalizeToSphere(sample.view({-1, num_parts, config_.embed_dim})));
+  return ControllerActions(normalized_obs, TaskZ(normalized_obs, sample));
 }
 
 torch::Tensor ModSkillPolicyImpl::ControllerActions(const torch::Tensor& normalized_obs, const torch::Tensor& z) {

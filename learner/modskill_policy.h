@@ -7,7 +7,9 @@
 // and maps the task observation to one z per part for the (frozen, proprioceptive) controllers
 // of a tracker (skill_library.h). Exploration then happens in z space, as in ASE's and PULSE's
 // high levels: PPO samples the task head's raw output and the controllers turn the sample into
-// actions. SampleMean, ActionsFor and sample_size say what is sampled in either mode.
+// actions. SampleMean, ActionsFor and sample_size say what is sampled in either mode. With a
+// skill prior (uses_skill_prior) the tracker's frozen attention gives z_prior and the sample is a
+// displacement of it: z = normalize(z_prior + sample).
 #ifndef MODSKILL_LEARNER_MODSKILL_POLICY_H_
 #define MODSKILL_LEARNER_MODSKILL_POLICY_H_
 
@@ -22,7 +24,7 @@
 namespace modskill::learner {
 
 // Submodules: "attention" (SkillAttention) or, with a goal, "task_head" (Mlp: obs_size ->
-// config.task_hidden... -> P * E); "controller<p>" per part, or one "whole_body_controller" for
+// config.task_hidden... -> P * E) and, with a skill prior, the tracker's "attention" as well; "controller<p>" per part, or one "whole_body_controller" for
 // the whole-body ablation (input: all z flattened + the full obs, output: all actions).
 // Buffer "log_std" [sample_size()], filled with config.log_std (config.task_log_std with a goal).
 class ModSkillPolicyImpl : public torch::nn::Module {
@@ -41,6 +43,12 @@ class ModSkillPolicyImpl : public torch::nn::Module {
   torch::Tensor ActionsFor(const torch::Tensor& normalized_obs, const torch::Tensor& sample);
   int64_t sample_size() const;
   bool task_mode() const { return layout_.has_goal(); }
+  // A task policy over the tracker's attention (config.task_skill_prior where the layout's parts
+  // observe a reference: the parts' obs slices hold more than their self features).
+  bool uses_skill_prior() const { return task_mode() && !attention_.is_empty(); }
+  // The z a sample [B, sample_size()] drives in task mode: normalize(sample), or with a prior
+  // normalize(z_prior(obs) + sample). [B, P, E]
+  torch::Tensor TaskZ(const torch::Tensor& normalized_obs, const torch::Tensor& sample);
 
   // normalized_obs: [B, obs_size] -> z [B, P, E], attention [B, P, P] (undefined with a goal)
   SkillAttentionOutput skills(const torch::Tensor& normalized_obs);
@@ -58,7 +66,7 @@ class ModSkillPolicyImpl : public torch::nn::Module {
 
   const NetworkLayout& layout() const { return layout_; }
   const ModelConfig& config() const { return config_; }
-  // Null with a goal.
+  // Null with a goal, unless it is the tracker's attention under a skill prior.
   const SkillAttention& attention() const { return attention_; }
   // Null without a goal.
   const Mlp& task_head() const { return task_head_; }

@@ -117,8 +117,17 @@ void EmitTaskHead(const ModSkillPolicyImpl& policy, std::string* src) {
   const NetworkLayout& layout = policy.layout();
   absl::StrAppend(src, "    # task '", layout.task, "': goal obs [", layout.goal_start, ", ",
                   layout.goal_start + layout.goal_size, "); one z per part from the task head\n");
+  std::string prior;
+  if (policy.uses_skill_prior()) {
+    // The tracker's attention on the anchored base motion gives z_prior; the head displaces it.
+    EmitSkillAttention(policy, src);
+    absl::StrAppend(src, "    z = z / torch.clamp_min(torch.sqrt(torch.sum(z * z, [-1], True)), ",
+                    ScriptFloat(SkillAttentionImpl::kMinNorm), ")\n");
+    prior = "z + ";
+  }
   EmitMlp(*policy.task_head(), "task_head", "x", "h", src);
-  absl::StrAppend(src, "    z = torch.reshape(h, [-1, ", layout.parts.size(), ", ", policy.config().embed_dim, "])\n");
+  absl::StrAppend(src, "    z = ", prior, "torch.reshape(h, [-1, ", layout.parts.size(), ", ", policy.config().embed_dim,
+                  "])\n");
 }
 
 // Emits the actions from z: the part controllers (or the whole-body one), returned.
@@ -144,9 +153,8 @@ void RegisterPolicyTensors(ModSkillPolicy& policy, RunningMeanStd& obs_norm, tor
   module->register_buffer("obs_mean", obs_norm->mean().detach().clone());
   module->register_buffer("obs_var", obs_norm->var().detach().clone());
   module->register_buffer("log_std", policy->log_std().detach().clone());
-  if (policy->task_mode()) {
-    RegisterMlp(*policy->task_head(), "task_head", module);
-  } else {
+  if (policy->task_mode()) RegisterMlp(*policy->task_head(), "task_head", module);
+  if (!policy->task_mode() || policy->uses_skill_prior()) {
     const SkillAttentionImpl& attention = *policy->attention();
     for (size_t p = 0; p < layout.parts.size(); ++p) {
       RegisterMlp(*attention.values()[p], PartPrefix(p, "value"), module);

@@ -18,10 +18,11 @@ namespace modskill::learner {
 // The C++ frontend's modules cannot be scripted, so the exporter copies every tensor the
 // forward pass uses into a torch::jit::Module under a flat name (obs_mean, obs_var, log_std,
 // part<p>_{key,query,value,controller}_fc<i>_{weight,bias} or whole_body_controller_fc<i>_...;
-// a task policy has task_head_fc<i>_... instead of the attention's maps) and defines a forward
-// generated here, unrolled per part and per layer, with the same operations as
-// RunningMeanStd::Normalize and ModSkillPolicy::forward (a task policy: normalize -> task head ->
-// z per part on the unit sphere -> the frozen controllers). The archive carries spec.ToJson() as
+// a task policy has task_head_fc<i>_... instead of the attention's maps, or beside them with a
+// skill prior) and defines a forward generated here, unrolled per part and per layer, with the
+// same operations as RunningMeanStd::Normalize and ModSkillPolicy::forward (a task policy:
+// normalize -> task head (+ the tracker's z_prior) -> z per part on the unit sphere -> the frozen
+// controllers). The archive carries spec.ToJson() as
 // the extra file kCheckpointSpecFile and is written atomically. INVALID_ARGUMENT when spec's
 // sizes or task, or obs_norm's size, differ from the policy's layout.
 absl::Status ExportPolicy(ModSkillPolicy& policy, RunningMeanStd& obs_norm, const modskill::PolicySpec& spec,

@@ -16,6 +16,17 @@ int64_t SelfSize(const v1::BodyPart& part) {
   return size;
 }
 
+// Whether the task's parts observe what tracking's do, at the same places (steer, reach and
+// strike observe their anchored base motion as the reference).
+bool ObservesTrackingsReference(const v1::EnvSpec& tracking, const v1::EnvSpec& task) {
+  if (tracking.parts_size() != task.parts_size()) return false;
+  for (int p = 0; p < task.parts_size(); ++p) {
+    const v1::Slice &mine = tracking.parts(p).obs(), &theirs = task.parts(p).obs();
+    if (mine.start() != theirs.start() || mine.size() != theirs.size()) return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 absl::StatusOr<SkillLibrary> SkillLibrary::Load(const std::string& path) {
@@ -46,6 +57,18 @@ absl::StatusOr<SkillLibrary> SkillLibrary::Load(const std::string& path) {
   if (!value.ok()) return value.status();
   if (value->empty()) return invalid("not a ModSkill tracker (no part0_value weights: no skill embedding)");
   library.embed_dim_ = value->back().weight.size(0);
+  library.attention_hidden_ = HiddenSizes(*value);
+  const bool attention = library.policy_.Has("part0_key_fc0_weight");
+  for (size_t p = 0; p < library.controllers_.size(); ++p) {
+    for (const char* map : {"value", "key", "query"}) {
+      if (std::string(map) != "value" && !attention) continue;
+      auto layers = library.policy_.Mlp(absl::StrCat("part", p, "_", map));
+      if (!layers.ok()) return layers.status();
+      if (layers->empty()) return invalid(absl::StrCat("no part", p, "_", map, " weights (an incomplete attention)"));
+      (std::string(map) == "value" ? library.values_ : std::string(map) == "key" ? library.keys_ : library.queries_)
+          .push_back(*std::move(layers));
+    }
+  }
   for (const char* name : {"obs_mean", "obs_var"}) {
     if (!library.policy_.Has(name) || library.policy_.tensors.at(name).numel() != spec.obs_size) {
       return invalid(absl::StrCat("no ", name, " of ", spec.obs_size, " features (not an exported ModSkill policy)"));
@@ -115,6 +138,8 @@ ModelConfig SkillLibrary::ConfigFor(ModelConfig config) const {
   config.controller_hidden = controller_hidden_;
   config.controller_input = ModelConfig::ControllerInput::kProprioception;
   config.whole_body = false;
+  config.attention_hidden = attention_hidden_;
+  config.attention = !keys_.empty();
   return config;
 }
 
@@ -132,6 +157,26 @@ absl::Status SkillLibrary::LoadControllers(ModSkillPolicyImpl& policy) const {
     }
     for (torch::Tensor& parameter : controller->parameters()) parameter.set_requires_grad(false);
   }
+  if (!policy.uses_skill_prior()) return absl::OkStatus();
+  SkillAttention attention = policy.attention();  // a handle that can be written through
+  return LoadAttention(*attention);
+}
+
+absl::Status SkillLibrary::LoadAttention(SkillAttentionImpl& attention) const {
+  if (attention.values().size() != num_parts() || attention.uses_attention() != !keys_.empty()) {
+    return Misfit("its attention does not fit the task policy's (parts or attention maps differ)");
+  }
+  for (size_t p = 0; p < num_parts(); ++p) {
+    const std::string what = absl::StrCat(path(), ": part ", p, " attention");
+    Mlp value = attention.values()[p];  // handles that can be written through
+    if (absl::Status status = CopyIntoMlp(values_[p], *value, what); !status.ok()) return status;
+    if (!keys_.empty()) {
+      Mlp key = attention.keys()[p], query = attention.queries()[p];
+      if (absl::Status status = CopyIntoMlp(keys_[p], *key, what); !status.ok()) return status;
+      if (absl::Status status = CopyIntoMlp(queries_[p], *query, what); !status.ok()) return status;
+    }
+  }
+  for (torch::Tensor& parameter : attention.parameters()) parameter.set_requires_grad(false);
   return absl::OkStatus();
 }
 
@@ -158,6 +203,15 @@ absl::Status SkillLibrary::LoadSelfStatistics(const v1::EnvSpec& tracking, const
   const torch::Tensor& mean = policy_.tensors.at("obs_mean");
   const torch::Tensor& var = policy_.tensors.at("obs_var");
   torch::Tensor frozen = torch::zeros({norm.size()}, torch::kBool);
+  if (ObservesTrackingsReference(tracking, task)) {
+    const int64_t size = tracking.obs_size();
+    if (mean.numel() != size || size > norm.size()) return Misfit("its observation statistics do not fit the task's");
+    norm.mean().narrow(0, 0, size).copy_(mean);
+    norm.var().narrow(0, 0, size).copy_(var);
+    frozen.narrow(0, 0, size).fill_(true);
+    norm.FreezeDims(frozen);
+    return absl::OkStatus();
+  }
   for (int p = 0; p < task.parts_size(); ++p) {
     for (int b = 0; b < task.parts(p).self_obs_size(); ++b) {
       const v1::Slice &from = tracking.parts(p).self_obs(b), &to = task.parts(p).self_obs(b);

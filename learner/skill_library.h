@@ -1,7 +1,9 @@
 // The skills a task policy reuses (skill reuse, issue 13): the part controllers of a tracker
-// trained with --controller_input proprioception, read from its exported policy.pt, and the
-// observation statistics they were trained under. The task policy's controllers are these
-// weights, frozen; its normalizer sees the self features exactly as the tracker's did.
+// trained with --controller_input proprioception, read from its exported policy.pt, its skill
+// attention (the prior of steer, reach and strike, model_config.h task_skill_prior) and the
+// observation statistics they were trained under. The task policy's controllers and attention
+// are these weights, frozen; its normalizer sees the tracker's features exactly as the tracker's
+// did.
 #ifndef MODSKILL_LEARNER_SKILL_LIBRARY_H_
 #define MODSKILL_LEARNER_SKILL_LIBRARY_H_
 
@@ -34,12 +36,14 @@ class SkillLibrary {
 
   // `config` with the tracker's embed_dim and controller sizes, per-part proprioceptive controllers.
   ModelConfig ConfigFor(ModelConfig config) const;
-  // Copies the controllers into `policy` (a task policy built with ConfigFor) and freezes them
-  // (requires_grad false: the optimizer leaves them out, ppo_update.h).
+  // Copies the controllers (and, under a skill prior, the attention) into `policy` (a task policy
+  // built with ConfigFor) and freezes them (requires_grad false: the optimizer leaves them out,
+  // ppo_update.h).
   absl::Status LoadControllers(ModSkillPolicyImpl& policy) const;
-  // Copies the tracker's mean and var of every body's self features from its observation
-  // (tracking's self_obs slices) to the task observation (task's, body by body) into `norm`,
-  // and freezes those dims; the goal dims keep adapting.
+  // Copies the tracker's mean and var of what it observed into `norm` and freezes those dims; the
+  // goal dims keep adapting. Where the task observes a reference (its parts' slices are
+  // tracking's), the whole tracking observation; otherwise every body's self features, from
+  // tracking's self_obs slices to the task's, body by body.
   absl::Status LoadSelfStatistics(const v1::EnvSpec& tracking, const v1::EnvSpec& task, RunningMeanStdImpl& norm) const;
 
   // FAILED_PRECONDITION naming the file unless `policy`'s controllers are these skills, weight
@@ -56,11 +60,15 @@ class SkillLibrary {
   // The error for a file that does not fit: FAILED_PRECONDITION naming it and `why`.
   absl::Status Misfit(const std::string& why) const;
   absl::Status CheckControllerInputs(const v1::EnvSpec& tracking) const;
+  absl::Status LoadAttention(SkillAttentionImpl& attention) const;
 
   ExportedPolicy policy_;
   int64_t embed_dim_ = 0;
   std::vector<int64_t> controller_hidden_;
   std::vector<std::vector<LinearWeights>> controllers_;  // per part
+  // The attention's maps per part (keys and queries empty without attention).
+  std::vector<std::vector<LinearWeights>> values_, keys_, queries_;
+  std::vector<int64_t> attention_hidden_;
 };
 
 }  // namespace modskill::learner

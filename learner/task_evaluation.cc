@@ -33,6 +33,14 @@ absl::StatusOr<ModelConfig> TaskConfigOf(const ExportedPolicy& exported, const N
   config.task_hidden = HiddenSizes(*head);
   config.controller_hidden = HiddenSizes(*controller);
   config.controller_input = ModelConfig::ControllerInput::kProprioception;
+  // A skill prior: the tracker's attention was exported beside the head.
+  auto value = exported.Mlp("part0_value");
+  if (!value.ok()) return value.status();
+  config.task_skill_prior = !value->empty();
+  if (config.task_skill_prior) {
+    config.attention_hidden = HiddenSizes(*value);
+    config.attention = exported.Has("part0_key_fc0_weight");
+  }
   return config;
 }
 
@@ -43,6 +51,21 @@ absl::Status CopyTaskPolicy(const ExportedPolicy& exported, ModSkillPolicyImpl& 
   Mlp task_head = policy.task_head();  // handles that can be written through
   if (absl::Status status = CopyIntoMlp(*head, *task_head, exported.path + ": task_head"); !status.ok()) {
     return status;
+  }
+  if (policy.config().task_skill_prior != policy.uses_skill_prior()) {
+    return Invalid(exported.path, "its skill prior does not fit the session (no reference features to read)");
+  }
+  std::vector<std::pair<std::string, Mlp>> maps;
+  for (size_t p = 0; policy.uses_skill_prior() && p < policy.controllers().size(); ++p) {
+    maps.emplace_back(absl::StrCat("part", p, "_value"), policy.attention()->values()[p]);
+    if (!policy.attention()->uses_attention()) continue;
+    maps.emplace_back(absl::StrCat("part", p, "_key"), policy.attention()->keys()[p]);
+    maps.emplace_back(absl::StrCat("part", p, "_query"), policy.attention()->queries()[p]);
+  }
+  for (auto& [prefix, mlp] : maps) {
+    auto layers = exported.Mlp(prefix);
+    if (!layers.ok()) return layers.status();
+    if (absl::Status status = CopyIntoMlp(*layers, *mlp, exported.path + ": " + prefix); !status.ok()) return status;
   }
   for (size_t p = 0; p < policy.controllers().size(); ++p) {
     auto layers = exported.Mlp(absl::StrCat("part", p, "_controller"));
@@ -176,6 +199,15 @@ absl::StatusOr<TaskEvaluationReport> EvaluateTaskPolicy(SimulationClient& client
                               nullptr);
   if (!constant.ok()) return constant.status();
   report.rows.push_back(*constant);
+  if (!policy.uses_skill_prior()) return report;
+  // What the head adds to the prior: the same skills on the prior's z alone.
+  auto prior = RunEpisodes(client, imported, options, "the skill prior alone (zero displacement)",
+                           [&](const torch::Tensor& obs) {
+                             return policy.TaskZ(obs, torch::zeros({obs.size(0), parts * embed}));
+                           },
+                           nullptr);
+  if (!prior.ok()) return prior.status();
+  report.rows.push_back(*prior);
   return report;
 }
 

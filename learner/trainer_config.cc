@@ -188,6 +188,7 @@ std::string TrainerConfig::ToJson() const {
     json["skills"] = skills;
     json["task_hidden"] = model.task_hidden;
     json["task_log_std"] = model.task_log_std;
+    json["task_skill_prior"] = model.task_skill_prior;
     json["task_settings"] = {{"min_speed", task_min_speed},
                              {"max_speed", task_max_speed},
                              {"min_goal_interval_s", task_min_goal_interval_s},

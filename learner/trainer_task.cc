@@ -57,9 +57,11 @@ absl::Status Trainer::LoadSkills() {
   if (absl::Status status = skills_->LoadSelfStatistics(tracking_spec_, spec_, *obs_norm_); !status.ok()) return status;
   task_return_.emplace(std::vector<std::string>(spec_.reward_terms().begin(), spec_.reward_terms().end()),
                        /*max_episode_steps=*/0);
-  LogLine("task %s: %d frozen part controllers from %s (z of %d, %s actions); task head %s", config_.task,
+  LogLine("task %s: %d frozen part controllers from %s (z of %d, %s actions); task head %s, %s", config_.task,
           static_cast<int>(skills_->num_parts()), skills_->path(), static_cast<int>(skills_->embed_dim()),
-          config_.action_mode, absl::StrJoin(config_.model.task_hidden, "x"));
+          config_.action_mode, absl::StrJoin(config_.model.task_hidden, "x"),
+          policy_->uses_skill_prior() ? "displacing the tracker's z on the base motion (skill prior)"
+                                      : "z from the head alone");
   return absl::OkStatus();
 }
 

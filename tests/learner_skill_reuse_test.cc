@@ -47,6 +47,10 @@ const v1::EnvSpec& Steer(const std::string& layout = "5part") { return SpecsOf(l
 
 ModelConfig SmallConfig() { return *ModelConfig::Preset("small"); }
 
+// Steer observes tracking's 934 features (its anchored base motion as the reference), then a
+// goal of 3.
+constexpr int64_t kSteerGoalStart = 934, kSteerObs = 937;
+
 std::string TmpPath(const std::string& name) {
   std::filesystem::create_directories(MODSKILL_TEST_TMP_DIR);
   return std::string(MODSKILL_TEST_TMP_DIR) + "/" + name;
@@ -114,19 +118,26 @@ bool AllEqual(const std::vector<torch::Tensor>& a, const std::vector<torch::Tens
   return true;
 }
 
-TEST(SkillReuseTest, TaskLayoutHasTheGoalAfterThePartsSelfFeatures) {
+TEST(SkillReuseTest, TaskLayoutHasTheGoalAfterThePartsFeatures) {
   const NetworkLayout layout = LayoutFromWireSpec(Steer());
   EXPECT_EQ(layout.task, "steer");
   EXPECT_TRUE(layout.has_goal());
-  EXPECT_EQ(layout.goal_start, 358);
+  EXPECT_EQ(layout.goal_start, kSteerGoalStart);
   EXPECT_EQ(layout.goal_size, 3);
-  EXPECT_EQ(layout.obs_size, 361);
-  EXPECT_EQ(layout.parts_obs_end(), 358);
+  EXPECT_EQ(layout.obs_size, kSteerObs);
+  EXPECT_EQ(layout.parts_obs_end(), kSteerGoalStart);
   EXPECT_TRUE(layout.Validate().ok()) << layout.Validate();
-  for (const PartSlices& part : layout.parts) EXPECT_EQ(part.self_obs_size(), part.obs_size) << part.name;
   const NetworkLayout tracking = LayoutFromWireSpec(Tracking());
   EXPECT_EQ(tracking.task, "tracking");
   EXPECT_FALSE(tracking.has_goal());
+  for (size_t p = 0; p < layout.parts.size(); ++p) {
+    EXPECT_EQ(layout.parts[p].obs_start, tracking.parts[p].obs_start) << layout.parts[p].name;
+    EXPECT_EQ(layout.parts[p].obs_size, tracking.parts[p].obs_size) << layout.parts[p].name;
+  }
+  // VR tracking observes its three bodies in the goal only: the parts hold their self features.
+  const NetworkLayout vr = LayoutFromWireSpec(SpecsOf("5part", TaskKind::kVrTracking).wire);
+  EXPECT_EQ(vr.goal_start, 358);
+  for (const PartSlices& part : vr.parts) EXPECT_EQ(part.self_obs_size(), part.obs_size) << part.name;
 
   NetworkLayout short_goal = layout;
   short_goal.goal_size = 2;
@@ -204,12 +215,52 @@ TEST(SkillReuseTest, FilesThatAreNotReusableSkillsAreClearErrors) {
   EXPECT_THAT(std::string(not_tracker.status().message()), HasSubstr("a policy for task steer"));
 }
 
+// Without the prior (--task_skill_prior=false), the paper's high level: z from the head alone.
+TEST(SkillReuseTest, WithoutThePriorZComesFromTheHeadAlone) {
+  torch::manual_seed(6);
+  ModelConfig config = Skills().ConfigFor(SmallConfig());
+  config.task_skill_prior = false;
+  ModSkillPolicy policy(LayoutFromWireSpec(Steer()), config);
+  ASSERT_TRUE(Skills().LoadControllers(*policy).ok());
+  EXPECT_FALSE(policy->uses_skill_prior());
+  EXPECT_TRUE(policy->attention().is_empty());
+  torch::NoGradGuard no_grad;
+  const torch::Tensor obs = torch::randn({4, kSteerObs});
+  Mlp task_head = policy->task_head();
+  const torch::Tensor head = task_head->forward(obs).view({4, 5, 32});
+  EXPECT_TRUE(torch::allclose(policy->skills(obs).z, head / head.norm(2, -1, true), 1e-6, 1e-6));
+}
+
+// With the prior, the tracker's frozen attention gives z on the base motion and the head's
+// sample displaces it; a fresh head starts at (almost) the tracker's own z.
+TEST(SkillReuseTest, ThePriorIsTheTrackersFrozenAttentionDisplacedByTheHead) {
+  torch::manual_seed(7);
+  TaskNetworks steer = SteerNetworks();
+  ModSkillPolicyImpl& policy = *steer.policy;
+  ASSERT_TRUE(policy.uses_skill_prior());
+  auto tracker = ReadExportedPolicy(Skills().path());
+  ASSERT_TRUE(tracker.ok()) << tracker.status();
+  EXPECT_TRUE(torch::equal(policy.attention()->values()[2]->layers()[0]->weight, tracker->tensors.at("part2_value_fc0_weight")));
+  EXPECT_TRUE(torch::equal(policy.attention()->keys()[4]->layers()[1]->bias, tracker->tensors.at("part4_key_fc1_bias")));
+  for (const torch::Tensor& p : policy.attention()->parameters()) EXPECT_FALSE(p.requires_grad());
+  torch::NoGradGuard no_grad;
+  const torch::Tensor obs = torch::randn({8, kSteerObs});
+  SkillAttention attention = policy.attention();
+  const torch::Tensor prior = attention->forward(obs).z;
+  const torch::Tensor zero = torch::zeros({8, policy.sample_size()});
+  EXPECT_TRUE(torch::allclose(policy.TaskZ(obs, zero), prior, 1e-6, 1e-6));
+  EXPECT_GT((policy.skills(obs).z * prior).sum(-1).min().item<double>(), 0.99) << "a fresh head displaces z a little";
+  const torch::Tensor sample = torch::randn({8, policy.sample_size()});
+  const torch::Tensor displaced = prior + sample.view({8, 5, 32});
+  EXPECT_TRUE(torch::allclose(policy.TaskZ(obs, sample), displaced / displaced.norm(2, -1, true), 1e-5, 1e-5));
+  EXPECT_TRUE(torch::equal(policy.ActionsFor(obs, sample), policy.ControllerActions(obs, policy.TaskZ(obs, sample))));
+}
+
 TEST(SkillReuseTest, TaskPolicyDrivesTheTrackersControllersWithZFromItsHead) {
   torch::manual_seed(2);
   TaskNetworks steer = SteerNetworks();
   ModSkillPolicyImpl& policy = *steer.policy;
   EXPECT_TRUE(policy.task_mode());
-  EXPECT_TRUE(policy.attention().is_empty());
   EXPECT_EQ(policy.sample_size(), 5 * 32);
   EXPECT_TRUE(torch::equal(policy.log_std(), torch::full({160}, -2.9)));
   EXPECT_TRUE(Skills().CheckSameControllers(policy).ok());
@@ -218,13 +269,13 @@ TEST(SkillReuseTest, TaskPolicyDrivesTheTrackersControllersWithZFromItsHead) {
   }
   for (const torch::Tensor& p : policy.task_head()->parameters()) EXPECT_TRUE(p.requires_grad());
   torch::NoGradGuard no_grad;
-  const torch::Tensor obs = torch::randn({6, 361});
+  const torch::Tensor obs = torch::randn({6, kSteerObs});
   const torch::Tensor z = policy.skills(obs).z;
   EXPECT_TRUE(torch::allclose(z.norm(2, -1), torch::ones({6, 5}), 1e-5, 1e-5));
   EXPECT_TRUE(torch::equal(policy.forward(obs), policy.ActionsFor(obs, policy.SampleMean(obs))));
   // The goal reaches the actions only through z: with z fixed, the goal features change nothing.
   torch::Tensor other_goal = obs.clone();
-  other_goal.slice(1, 358, 361) += 3.0;
+  other_goal.slice(1, kSteerGoalStart, kSteerObs) += 3.0;
   EXPECT_TRUE(torch::equal(policy.ControllerActions(obs, z), policy.ControllerActions(other_goal, z)));
   EXPECT_FALSE(torch::equal(policy.forward(obs), policy.forward(other_goal)));
 }
@@ -234,11 +285,12 @@ TEST(SkillReuseTest, PpoUpdatesTrainTheTaskHeadAndLeaveTheSkillsFrozen) {
   torch::manual_seed(3);
   TaskNetworks steer = SteerNetworks();
   ModSkillPolicyImpl& policy = *steer.policy;
-  Critic critic(361, SmallConfig().critic_hidden);
+  Critic critic(kSteerObs, SmallConfig().critic_hidden);
   const std::vector<torch::Tensor> trainable = TrainableParameters(policy, *critic);
   EXPECT_EQ(trainable.size(), policy.task_head()->parameters().size() + critic->parameters().size());
   torch::optim::Adam optimizer(trainable, torch::optim::AdamOptions(1e-3));
   std::vector<torch::Tensor> controllers_before, head_before = Clones(policy.task_head()->parameters());
+  const std::vector<torch::Tensor> attention_before = Clones(policy.attention()->parameters());
   for (const PartController& controller : policy.controllers()) {
     for (const torch::Tensor& p : Clones(controller->parameters())) controllers_before.push_back(p);
   }
@@ -248,7 +300,7 @@ TEST(SkillReuseTest, PpoUpdatesTrainTheTaskHeadAndLeaveTheSkillsFrozen) {
   int updates = 0;
   for (int iteration = 0; iteration < 3; ++iteration) {
     PpoBatch batch;
-    batch.obs = torch::randn({256, 361});
+    batch.obs = torch::randn({256, kSteerObs});
     torch::NoGradGuard no_grad;
     const torch::Tensor mean = policy.SampleMean(batch.obs);
     batch.samples = mean + policy.log_std().exp() * torch::randn(mean.sizes());
@@ -265,35 +317,46 @@ TEST(SkillReuseTest, PpoUpdatesTrainTheTaskHeadAndLeaveTheSkillsFrozen) {
     for (const torch::Tensor& p : controller->parameters()) controllers_after.push_back(p);
   }
   EXPECT_TRUE(AllEqual(controllers_before, controllers_after)) << "the skills moved";
+  EXPECT_TRUE(AllEqual(attention_before, policy.attention()->parameters())) << "the prior moved";
   EXPECT_TRUE(Skills().CheckSameControllers(policy).ok());
   EXPECT_FALSE(AllEqual(head_before, policy.task_head()->parameters())) << "the task head did not learn";
 }
 
 // (ii) The normalizer sees the self features as the tracker's did, and its updates leave them so.
-TEST(SkillReuseTest, TrackerStatisticsOfTheSelfFeaturesStayFrozen) {
+TEST(SkillReuseTest, TrackerStatisticsStayFrozen) {
   torch::manual_seed(4);
-  TaskNetworks steer = SteerNetworks();
-  RunningMeanStdImpl& norm = *steer.norm;
   auto tracker = ReadExportedPolicy(Skills().path());
   ASSERT_TRUE(tracker.ok()) << tracker.status();
   const torch::Tensor& tracker_mean = tracker->tensors.at("obs_mean");
   const torch::Tensor& tracker_var = tracker->tensors.at("obs_var");
-  for (int p = 0; p < Steer().parts_size(); ++p) {
-    for (int b = 0; b < Steer().parts(p).self_obs_size(); ++b) {
-      const v1::Slice &from = Tracking().parts(p).self_obs(b), &to = Steer().parts(p).self_obs(b);
-      EXPECT_TRUE(torch::equal(norm.mean().narrow(0, to.start(), to.size()),
+  // Steer observes what the tracker did: every one of its statistics is the tracker's.
+  TaskNetworks steer = SteerNetworks();
+  RunningMeanStdImpl& norm = *steer.norm;
+  EXPECT_TRUE(torch::equal(norm.mean().slice(0, 0, kSteerGoalStart), tracker_mean));
+  EXPECT_TRUE(torch::equal(norm.var().slice(0, 0, kSteerGoalStart), tracker_var));
+  EXPECT_EQ(norm.frozen().sum().item<int64_t>(), kSteerGoalStart);
+  const torch::Tensor mean_before = norm.mean().clone(), var_before = norm.var().clone();
+  for (int i = 0; i < 3; ++i) norm.Update(torch::randn({128, kSteerObs}) * 7.0 + 2.0);
+  EXPECT_TRUE(torch::equal(norm.mean().slice(0, 0, kSteerGoalStart), mean_before.slice(0, 0, kSteerGoalStart)));
+  EXPECT_TRUE(torch::equal(norm.var().slice(0, 0, kSteerGoalStart), var_before.slice(0, 0, kSteerGoalStart)));
+  EXPECT_GT((norm.mean().slice(0, kSteerGoalStart) - mean_before.slice(0, kSteerGoalStart)).abs().min().item<double>(),
+            0.5);
+  EXPECT_GT(norm.var().slice(0, kSteerGoalStart).min().item<double>(), 10.0) << "the goal dims adapt";
+
+  // VR tracking observes the self features only: those are copied body by body.
+  const v1::EnvSpec& vr = SpecsOf("5part", TaskKind::kVrTracking).wire;
+  RunningMeanStdImpl vr_norm(vr.obs_size());
+  ASSERT_TRUE(Skills().LoadSelfStatistics(Tracking(), vr, vr_norm).ok());
+  for (int p = 0; p < vr.parts_size(); ++p) {
+    for (int b = 0; b < vr.parts(p).self_obs_size(); ++b) {
+      const v1::Slice &from = Tracking().parts(p).self_obs(b), &to = vr.parts(p).self_obs(b);
+      EXPECT_TRUE(torch::equal(vr_norm.mean().narrow(0, to.start(), to.size()),
                                tracker_mean.narrow(0, from.start(), from.size())));
-      EXPECT_TRUE(torch::equal(norm.var().narrow(0, to.start(), to.size()),
+      EXPECT_TRUE(torch::equal(vr_norm.var().narrow(0, to.start(), to.size()),
                                tracker_var.narrow(0, from.start(), from.size())));
     }
   }
-  EXPECT_EQ(norm.frozen().sum().item<int64_t>(), 358);
-  const torch::Tensor mean_before = norm.mean().clone(), var_before = norm.var().clone();
-  for (int i = 0; i < 3; ++i) norm.Update(torch::randn({128, 361}) * 7.0 + 2.0);
-  EXPECT_TRUE(torch::equal(norm.mean().slice(0, 0, 358), mean_before.slice(0, 0, 358)));
-  EXPECT_TRUE(torch::equal(norm.var().slice(0, 0, 358), var_before.slice(0, 0, 358)));
-  EXPECT_GT((norm.mean().slice(0, 358) - mean_before.slice(0, 358)).abs().min().item<double>(), 0.5);
-  EXPECT_GT(norm.var().slice(0, 358).min().item<double>(), 10.0) << "the goal dims adapt";
+  EXPECT_EQ(vr_norm.frozen().sum().item<int64_t>(), 358);
 }
 
 // (iv) The exported task policy computes the C++ modules' actions from raw observations; the
@@ -301,14 +364,14 @@ TEST(SkillReuseTest, TrackerStatisticsOfTheSelfFeaturesStayFrozen) {
 TEST(SkillReuseTest, ExportedTaskPolicyMatchesTheModules) {
   torch::manual_seed(5);
   TaskNetworks steer = SteerNetworks();
-  for (int i = 0; i < 2; ++i) steer.norm->Update(torch::randn({64, 361}) * 2.0 + 1.0);
+  for (int i = 0; i < 2; ++i) steer.norm->Update(torch::randn({64, kSteerObs}) * 2.0 + 1.0);
   PolicySpec spec = PolicySpecForEnv(SpecsOf("5part", TaskKind::kSteer).env);
   spec.controller_input = "proprioception";
   const std::string path = TmpPath("skill_reuse_steer.pt");
   const absl::Status exported = ExportPolicy(steer.policy, steer.norm, spec, path);
   ASSERT_TRUE(exported.ok()) << exported << "\n" << PolicyScriptSource(*steer.policy);
 
-  const torch::Tensor raw = torch::randn({16, 361}) * 3.0;
+  const torch::Tensor raw = torch::randn({16, kSteerObs}) * 3.0;
   torch::NoGradGuard no_grad;
   const torch::Tensor expected = steer.policy->forward(steer.norm->Normalize(raw));
   torch::jit::Module script = torch::jit::load(path);

@@ -398,7 +398,7 @@ TEST(LearnerTrainingTest, SteerPolicyTrainsOverATrackersFrozenSkills) {
   options.episodes = 4;
   auto report = EvaluateTaskPolicy(*client, *imported, "steer policy", options);
   ASSERT_TRUE(report.ok()) << report.status();
-  ASSERT_EQ(report->rows.size(), 3u);
+  ASSERT_EQ(report->rows.size(), 4u) << "the policy, random z, constant z and the skill prior alone";
   for (const TaskEvaluationRow& row : report->rows) {
     EXPECT_EQ(row.episodes, 4) << row.z_source;
     EXPECT_GE(row.mean_normalized_return, 0.0) << row.z_source;
@@ -406,6 +406,7 @@ TEST(LearnerTrainingTest, SteerPolicyTrainsOverATrackersFrozenSkills) {
     EXPECT_LE(row.mean_episode_length, 30.0) << row.z_source;
   }
   EXPECT_THAT(report->ToMarkdown(), HasSubstr("random unit z"));
+  EXPECT_THAT(report->ToMarkdown(), HasSubstr("skill prior alone"));
 
   TrainerConfig unknown = config;
   unknown.task = "juggle";

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include "server/core/env/base_motion_anchor.h"
 #include "server/core/env/fall_detection.h"
 #include "server/core/env/observation.h"
 #include "server/core/env/reach_task.h"
@@ -32,7 +33,7 @@ int ClipIndex(const char* name) {
   return std::max(index, 0);
 }
 
-TEST(TaskSpecTest, TaskObservationIsTheSelfFeaturesThenTheGoal) {
+TEST(TaskSpecTest, TaskObservationIsTrackingsOrTheSelfFeaturesThenTheGoal) {
   for (const TaskInfo& task : AllTasks()) {
     auto batch = MakeBatch(TaskConfig(task.kind));
     ASSERT_NE(batch, nullptr) << task.name;
@@ -47,16 +48,19 @@ TEST(TaskSpecTest, TaskObservationIsTheSelfFeaturesThenTheGoal) {
       EXPECT_EQ(spec.goal_obs.size, 0);
       continue;
     }
-    EXPECT_EQ(spec.goal_obs.start, 358) << task.name;
+    // Steer, reach and strike observe what tracking does (their base motion as the reference),
+    // VR tracking the self features only; the goal follows.
+    const int bodies_end = IsGoalTask(task.kind) ? 934 : 358;
+    EXPECT_EQ(spec.goal_obs.start, bodies_end) << task.name;
     EXPECT_EQ(spec.goal_obs.size, task.goal_size) << task.name;
-    EXPECT_EQ(spec.task_obs_size, task.goal_size);
-    EXPECT_EQ(spec.obs_size, 358 + task.goal_size);
+    EXPECT_EQ(spec.task_obs_size, bodies_end - 358 + task.goal_size) << task.name;
+    EXPECT_EQ(spec.obs_size, bodies_end + task.goal_size);
     int end = 0;
     for (const Slice& part : spec.part_obs) {
       EXPECT_EQ(part.start, end) << task.name;
       end += part.size;
     }
-    EXPECT_EQ(end, 358) << task.name << ": the parts tile the self features";
+    EXPECT_EQ(end, bodies_end) << task.name << ": the parts tile the bodies' features";
   }
   EXPECT_EQ(TaskInfoOf(TaskKind::kSteer).goal_size, 3);
   EXPECT_EQ(TaskInfoOf(TaskKind::kReach).goal_size, 3);
@@ -105,6 +109,38 @@ HumanoidState StandingState() {
   state.Resize(24, 69);
   ReadReferenceState(DefaultMotions()->clip(ClipIndex("deepmimic_walk")), 0, &state);
   return state;
+}
+
+// Right after a reset the character stands on the reference, so the anchored base motion is the
+// reference itself: a goal task's body features equal tracking's, reference features included.
+TEST(TaskSpecTest, GoalTaskReferenceFeaturesAreTrackingsOnTheReference) {
+  auto tracking = MakeBatch(TaskConfig(TaskKind::kTracking, 1));
+  auto steer = MakeBatch(TaskConfig(TaskKind::kSteer, 1));
+  ASSERT_TRUE(tracking && steer);
+  const int walk = ClipIndex("deepmimic_walk");
+  for (EnvBatch* batch : {tracking.get(), steer.get()}) batch->env(0).ResetTo(walk, 7, batch->row(0));
+  for (int k = 0; k < 934; ++k) {
+    ASSERT_NEAR(steer->buffers().obs[k], tracking->buffers().obs[k], 1e-5) << "feature " << k;
+  }
+}
+
+// The anchor carries the next frame onto the character: a target equal to the anchor lands on
+// the character's root (x, y) facing its heading, at the clip's own height, and a body's offset
+// from the root turns with the heading.
+TEST(BaseMotionAnchorTest, CarriesTheClipOntoTheCharactersRootAndHeading) {
+  HumanoidState anchor = StandingState(), sim = StandingState(), target = StandingState();
+  const Quat turn(Eigen::AngleAxisd(1.2, Vec3::UnitZ()));
+  sim.body_pos[0] += Vec3(3.0, -2.0, 0.1);
+  sim.body_rot[0] = turn * sim.body_rot[0];
+  const Vec3 hand_offset = target.body_pos[23] - target.body_pos[0];
+  const Vec3 velocity = target.body_vel[5];
+  AnchorToCharacter(anchor, sim, &target);
+  EXPECT_NEAR(target.body_pos[0].x(), sim.body_pos[0].x(), 1e-9);
+  EXPECT_NEAR(target.body_pos[0].y(), sim.body_pos[0].y(), 1e-9);
+  EXPECT_NEAR(target.body_pos[0].z(), anchor.body_pos[0].z(), 1e-9) << "heights stay the clip's";
+  EXPECT_NEAR(target.body_rot[0].angularDistance(sim.body_rot[0]), 0.0, 1e-9);
+  EXPECT_LT(((target.body_pos[23] - target.body_pos[0]) - turn * hand_offset).norm(), 1e-9);
+  EXPECT_LT((target.body_vel[5] - turn * velocity).norm(), 1e-9);
 }
 
 TEST(SteerTaskTest, MovingAlongTheTargetAtItsSpeedWhileFacingItEarnsOne) {

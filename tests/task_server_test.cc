@@ -42,13 +42,13 @@ TEST_F(SimulationServerTest, SteerSessionEqualsTheInProcessTaskEnv) {
   ASSERT_TRUE(stream.ok()) << stream.status();
   const v1::EnvSpec& spec = (*stream)->opened().spec();
   EXPECT_EQ(spec.task(), "steer");
-  EXPECT_EQ(spec.obs_size(), 361);
-  EXPECT_EQ(spec.goal_obs().start(), 358);
+  EXPECT_EQ(spec.obs_size(), 934 + 3);
+  EXPECT_EQ(spec.goal_obs().start(), 934);
   EXPECT_EQ(spec.goal_obs().size(), 3);
   EXPECT_THAT(spec.reward_terms(), ElementsAre("speed", "facing", "energy"));
-  // The parts' self slices point at the same features as in tracking, in task coordinates.
+  // The parts' slices are tracking's: each body's self features, then its base motion's.
   EXPECT_EQ(spec.parts(0).self_obs(0).start(), 0);
-  EXPECT_EQ(spec.parts(0).obs().size(), spec.parts(0).self_obs_size() * 15);
+  EXPECT_EQ(spec.parts(0).obs().size(), spec.parts(0).self_obs_size() * (15 + 24));
 
   EnvBatchConfig local_config;
   local_config.num_envs = 3;
@@ -66,7 +66,7 @@ TEST_F(SimulationServerTest, SteerSessionEqualsTheInProcessTaskEnv) {
   ASSERT_TRUE(ReadFloatTensor((*stream)->opened().initial().obs(), "obs", &obs).ok());
   ASSERT_EQ(obs, local->buffers().obs);
   for (int i = 0; i < 3; ++i) {
-    const float speed = obs[i * 361 + 360];
+    const float speed = obs[i * 937 + 936];
     EXPECT_GE(speed, 1.0f);
     EXPECT_LE(speed, 1.5f);
   }

@@ -59,6 +59,9 @@ ABSL_FLAG(std::string, task, "tracking",
 ABSL_FLAG(std::string, skills, "",
           "--task: a tracker's exported policy.pt, trained with --controller_input proprioception");
 ABSL_FLAG(double, task_log_std, -2.9, "--task: fixed log standard deviation of the task policy in z space");
+ABSL_FLAG(bool, task_skill_prior, true,
+          "--task steer|reach|strike: z = normalize(z_prior + task head), z_prior from the tracker's frozen attention on "
+          "the anchored base motion (false: z = normalize(task head), the paper's high level)");
 ABSL_FLAG(std::vector<std::string>, task_hidden, {},
           "--task: hidden sizes of the task head, e.g. 2048,1024,512 (default: the preset's; small 256,128)");
 ABSL_FLAG(double, task_min_speed, 0, "steer: lowest target speed, m/s (0: the server's default, 0.5)");
@@ -283,6 +286,7 @@ absl::Status TaskFromFlags(TrainerConfig* config) {
   config->task = absl::GetFlag(FLAGS_task);
   config->skills = absl::GetFlag(FLAGS_skills);
   config->model.task_log_std = absl::GetFlag(FLAGS_task_log_std);
+  config->model.task_skill_prior = absl::GetFlag(FLAGS_task_skill_prior);
   if (const std::vector<std::string> hidden = absl::GetFlag(FLAGS_task_hidden); !hidden.empty()) {
     config->model.task_hidden.clear();
     for (const std::string& size : hidden) {

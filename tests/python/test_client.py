@@ -124,13 +124,14 @@ class ClientTest(unittest.TestCase):
                                  task_settings={"min_speed": 1.0, "max_speed": 1.5}) as session:
             spec = session.spec
             self.assertEqual(spec.task, "steer")
-            self.assertEqual(spec.obs_size, spec.self_obs_size + 3)
+            # Steer observes what tracking does (its base motion as the reference), then the goal.
+            self.assertEqual(spec.obs_size, spec.self_obs_size + spec.task_obs_size)
+            self.assertEqual(spec.goal_obs, slice(spec.obs_size - 3, spec.obs_size))
             self.assertEqual(session.initial.obs.shape, (2, spec.obs_size))
             speeds = session.initial.obs[:, spec.obs_size - 1]
             self.assertTrue(np.all((speeds >= 1.0) & (speeds <= 1.5)), speeds)
             result = session.step(np.zeros((2, spec.action_size), np.float32))
             self.assertEqual(result.reward_terms.shape, (2, 3))
-            self.assertEqual(spec.goal_obs, slice(spec.self_obs_size, spec.obs_size))
         self.assertEqual(self.client.describe().tasks["strike"], (15, ("strike", "energy")))
         with self.assertRaises(modskill.ServerError) as caught:
             self.client.session(2, task="sterr")

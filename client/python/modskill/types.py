@@ -94,8 +94,9 @@ class EnvSpec:
     # One per body (body_names order), for viewers (modskill.viewer); empty from a server older
     # than the viewer.
     body_geometry: Tuple[BodyGeometry, ...] = dataclasses.field(repr=False, compare=False)
-    # The session's task ("tracking", "steer", ...); in a task env obs is the self features then
-    # the goal, obs[goal_obs]. ``tasks``: what Describe offers, name -> (goal size, reward terms).
+    # The session's task ("tracking", "steer", ...); in a task env the goal ends obs, obs[goal_obs]
+    # (steer, reach, strike: after tracking's features of the anchored base motion; vr_tracking:
+    # after the self features). ``tasks``: what Describe offers, name -> (goal size, reward terms).
     task: str = "tracking"
     goal_obs: slice = dataclasses.field(default_factory=lambda: slice(0, 0))
     tasks: Dict[str, Tuple[int, Tuple[str, ...]]] = dataclasses.field(default_factory=dict, compare=False)

@@ -14,9 +14,11 @@ EnvSpec MakeEnvSpec(const HumanoidModel& humanoid, const PartLayout& layout, Tas
   env.task = task;
   const TaskInfo& info = TaskInfoOf(task);
   env.reward_terms = info.reward_terms;
-  // Tracking interleaves each body's reference features with its self features; task envs
-  // append one goal after all the self features.
-  const int per_body_task = task == TaskKind::kTracking ? kTaskFeaturesPerBody : 0;
+  // Tracking interleaves each body's reference features with its self features; so do the goal
+  // tasks, whose reference is their base motion anchored to the character
+  // (base_motion_anchor.h). VR tracking has only its three bodies' features, in the goal. Task
+  // envs append the goal after every body's features.
+  const int per_body_task = task == TaskKind::kTracking || IsGoalTask(task) ? kTaskFeaturesPerBody : 0;
   env.body_order = layout.BodyOrder();
   env.body_obs_start.assign(spec.num_bodies(), 0);
   const std::vector<std::string> hinge_names = spec.HingeNames();

@@ -21,8 +21,9 @@ struct Slice {
 //   self  = [local pos 3 (not for the root), rot 6, vel 3, angvel 3] (+ root height 1 for the root)
 //   task  = [dpos 3, drot 6, dvel 3, dangvel 3, ref local pos 3, ref local rot 6]
 // so a body contributes [self | task]: 15 + 24, the root 13 + 24. Total 358 + 576 = 934.
-// A task env (steer, reach, vr_tracking) writes the self features only, body by body in the same
-// order, and then its goal: [358 | goal].
+// The goal tasks (steer, reach, strike) write the same 934 (their reference: the base motion
+// anchored to the character, base_motion_anchor.h) and then the goal: [934 | goal]. VR tracking
+// writes the self features only, body by body in the same order, then its goal: [358 | 72].
 inline constexpr int kSelfFeaturesPerBody = 15;
 inline constexpr int kSelfFeaturesRoot = 13;
 inline constexpr int kTaskFeaturesPerBody = 24;
@@ -46,11 +47,11 @@ struct EnvSpec {
   std::vector<int> action_hinge;    // per action index: hinge index (MuJoCo order)
   std::vector<int> amp_key_bodies;  // spec body indices
   TaskKind task = TaskKind::kTracking;
-  Slice goal_obs;                         // task envs: the goal after the self features
+  Slice goal_obs;                         // task envs: the goal after every body's features
   std::vector<std::string> reward_terms;  // StepResult.reward_terms columns
   int obs_size = 0;
   int self_obs_size = 0;
-  int task_obs_size = 0;  // tracking: the reference features; task envs: the goal
+  int task_obs_size = 0;  // the reference features (tracking, goal tasks) and the goal
   int action_size = 0;
   int amp_obs_per_frame = 0;
   int amp_obs_size = 0;  // kAmpHistory frames, newest first

@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "absl/strings/str_cat.h"
+#include "server/core/env/base_motion_anchor.h"
 #include "server/core/env/observation.h"
 
 namespace modskill {
@@ -242,7 +243,13 @@ void TrackingEnv::WriteObservation(EnvRow row) {
   float* obs = &out.obs[static_cast<size_t>(i) * spec.obs_size];
   ReadSimulatedState(*context_->humanoid, data_, &sim_);
   if (goal_task_ != nullptr) {
-    WriteSelfObservation(spec, sim_, obs);
+    // The base motion's next frame, carried onto the character from the frame before it (at
+    // the loop's seam that is frame 0 itself: one step without displacement).
+    const int next_frame = NextFrame();
+    ReadReferenceState(motion, next_frame, &target_);
+    ReadReferenceState(motion, std::max(next_frame - 1, 0), &reference_);
+    AnchorToCharacter(reference_, sim_, &target_);
+    WriteTrackingObservation(spec, sim_, target_, obs);
     goal_task_->WriteGoal(sim_, data_, obs + spec.goal_obs.start);
   } else {
     ReadReferenceState(motion, std::min(frame_ + 1, motion.num_frames - 1), &target_);
