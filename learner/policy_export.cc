@@ -176,16 +176,29 @@ void RegisterPolicyTensors(ModSkillPolicy& policy, RunningMeanStd& obs_norm, tor
 }  // namespace
 
 std::string PolicyScriptSource(const ModSkillPolicyImpl& policy) {
-  std::string src = "def forward(self, obs):\n";
-  absl::StrAppend(&src, "    # RunningMeanStd::Normalize\n");
-  EmitNormalize("obs", "obs", &src);
-  if (policy.task_mode()) {
-    EmitTaskHead(policy, &src);
-  } else {
-    EmitSkillAttention(policy, &src);
+  // skills(obs) -> z [N, P, E] on the unit sphere, and act_with_z(obs, z) -> actions: the two
+  // halves of forward, so that the server can record, swap and interpolate z (skill composition).
+  // forward stays one unrolled function: forward(obs) == act_with_z(obs, skills(obs)).
+  std::string src;
+  for (const char* method : {"forward", "skills"}) {
+    absl::StrAppend(&src, "def ", method, "(self, obs):\n", "    # RunningMeanStd::Normalize\n");
+    EmitNormalize("obs", "obs", &src);
+    if (policy.task_mode()) {
+      EmitTaskHead(policy, &src);
+    } else {
+      EmitSkillAttention(policy, &src);
+    }
+    absl::StrAppend(&src, "    z = z / torch.clamp_min(torch.sqrt(torch.sum(z * z, [-1], True)), ",
+                    ScriptFloat(SkillAttentionImpl::kMinNorm), ")\n");
+    if (std::string(method) == "forward") {
+      EmitControllers(policy, &src);
+    } else {
+      absl::StrAppend(&src, "    return z\n");
+    }
   }
-  absl::StrAppend(&src, "    z = z / torch.clamp_min(torch.sqrt(torch.sum(z * z, [-1], True)), ",
-                  ScriptFloat(SkillAttentionImpl::kMinNorm), ")\n");
+  absl::StrAppend(&src, "def act_with_z(self, obs, z_in):\n");
+  EmitNormalize("obs", "obs", &src);
+  absl::StrAppend(&src, "    z = z_in.to(x.dtype)\n");
   EmitControllers(policy, &src);
   return src;
 }

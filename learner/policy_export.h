@@ -1,6 +1,8 @@
 // Exports a trained ModSkill policy as the TorchScript checkpoint the server runs
 // (common/policy/policy_checkpoint.h): forward(obs) maps RAW observations [N, obs_size] to the
-// deterministic action means [N, action_size], normalization included.
+// deterministic action means [N, action_size], normalization included. Two more methods split it
+// for skill composition: skills(obs) -> z [N, P, E] (unit norm along E) and act_with_z(obs, z)
+// -> actions (the controllers only); forward(obs) == act_with_z(obs, skills(obs)).
 #ifndef MODSKILL_LEARNER_POLICY_EXPORT_H_
 #define MODSKILL_LEARNER_POLICY_EXPORT_H_
 

@@ -6,6 +6,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "common/atomic_file.h"
+#include "learner/skill_attention.h"
 
 namespace modskill::learner {
 
@@ -80,6 +81,89 @@ absl::Status CopyIntoMlp(const std::vector<LinearWeights>& layers, MlpImpl& mlp,
     layer->bias.copy_(layers[i].bias);
   }
   return absl::OkStatus();
+}
+
+namespace {
+
+// The sizes of the exported networks as a ModelConfig.
+absl::StatusOr<ModelConfig> ConfigOfExport(const ExportedPolicy& exported, const NetworkLayout& layout) {
+  auto invalid = [&](const std::string& why) { return absl::InvalidArgumentError(absl::StrCat(exported.path, ": ", why)); };
+  auto value = exported.Mlp("part0_value");
+  if (!value.ok()) return value.status();
+  if (value->empty()) return invalid("no part0_value weights: not an exported ModSkill tracker");
+  ModelConfig config;
+  config.preset = "rebuilt";
+  config.attention_hidden = HiddenSizes(*value);
+  config.embed_dim = value->back().weight.size(0);
+  config.attention = exported.Has("part0_key_fc0_weight");
+  config.whole_body = exported.Has("whole_body_controller_fc0_weight");
+  auto controller = exported.Mlp(config.whole_body ? "whole_body_controller" : "part0_controller");
+  if (!controller.ok()) return controller.status();
+  if (controller->empty()) return invalid("no controller weights");
+  config.controller_hidden = HiddenSizes(*controller);
+  auto input = ParseControllerInput(exported.spec.controller_input);
+  if (!input.ok()) return invalid(std::string(input.status().message()));
+  config.controller_input = *input;
+  // Files from before the spec recorded controller_input: a proprioceptive controller reads z and
+  // its bodies' self features only, which its first layer's width tells.
+  if (!config.whole_body && !layout.parts.empty() &&
+      controller->front().weight.size(1) == config.embed_dim + layout.parts[0].self_obs_size() &&
+      layout.parts[0].self_obs_size() != layout.parts[0].obs_size) {
+    config.controller_input = ModelConfig::ControllerInput::kProprioception;
+  }
+  if (!exported.Has("log_std") || exported.tensors.at("log_std").numel() < 1) return invalid("no log_std");
+  config.log_std = exported.tensors.at("log_std").flatten()[0].item<double>();
+  return config;
+}
+
+}  // namespace
+
+absl::StatusOr<RebuiltPolicy> RebuildTracker(const ExportedPolicy& exported, const NetworkLayout& layout) {
+  auto invalid = [&](const std::string& why) { return absl::InvalidArgumentError(absl::StrCat(exported.path, ": ", why)); };
+  if (exported.spec.task != kTrackingTask) return invalid(absl::StrCat("a policy for task ", exported.spec.task));
+  if (exported.Has("weight") && !exported.Has("obs_mean")) return invalid("an affine policy, not a ModSkill policy");
+  if (layout.obs_size != exported.spec.obs_size || layout.has_goal()) {
+    return invalid(absl::StrCat("trained on ", exported.spec.obs_size, " observation features, the layout has ",
+                                layout.obs_size));
+  }
+  auto config = ConfigOfExport(exported, layout);
+  if (!config.ok()) return config.status();
+  RebuiltPolicy rebuilt;
+  try {
+    rebuilt.policy = ModSkillPolicy(layout, *config);
+  } catch (const std::exception& e) {
+    std::string message = e.what();
+    return invalid(message.substr(0, message.find('\n')));
+  }
+  // Mlp handles (copies) can be written through.
+  auto copy = [&](const std::string& prefix, Mlp mlp) -> absl::Status {
+    auto layers = exported.Mlp(prefix);
+    if (!layers.ok()) return layers.status();
+    return CopyIntoMlp(*layers, *mlp, absl::StrCat(exported.path, ": ", prefix));
+  };
+  const SkillAttentionImpl& attention = *rebuilt.policy->attention();
+  for (size_t p = 0; p < layout.parts.size(); ++p) {
+    const std::string part = absl::StrCat("part", p, "_");
+    if (absl::Status s = copy(part + "value", attention.values()[p]); !s.ok()) return s;
+    if (config->attention) {
+      if (absl::Status s = copy(part + "key", attention.keys()[p]); !s.ok()) return s;
+      if (absl::Status s = copy(part + "query", attention.queries()[p]); !s.ok()) return s;
+    }
+    if (!config->whole_body) {
+      if (absl::Status s = copy(part + "controller", rebuilt.policy->controllers()[p]->mlp()); !s.ok()) return s;
+    }
+  }
+  if (config->whole_body) {
+    if (absl::Status s = copy("whole_body_controller", rebuilt.policy->controllers()[0]->mlp()); !s.ok()) return s;
+  }
+  rebuilt.obs_norm = RunningMeanStd(layout.obs_size);
+  torch::NoGradGuard no_grad;
+  for (const char* name : {"obs_mean", "obs_var"}) {
+    if (!exported.Has(name) || exported.tensors.at(name).numel() != layout.obs_size) return invalid(absl::StrCat("no ", name));
+  }
+  rebuilt.obs_norm->mean().copy_(exported.tensors.at("obs_mean"));
+  rebuilt.obs_norm->var().copy_(exported.tensors.at("obs_var"));
+  return rebuilt;
 }
 
 }  // namespace modskill::learner

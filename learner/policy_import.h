@@ -15,7 +15,10 @@
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
 #include "common/policy/policy_spec.h"
+#include "learner/model_config.h"
+#include "learner/modskill_policy.h"
 #include "learner/part_controller.h"
+#include "learner/running_mean_std.h"
 
 namespace modskill::learner {
 
@@ -44,6 +47,19 @@ std::vector<int64_t> HiddenSizes(const std::vector<LinearWeights>& layers);
 
 // Copies `layers` into `mlp` (same shapes, else INVALID_ARGUMENT naming `what`), without gradient.
 absl::Status CopyIntoMlp(const std::vector<LinearWeights>& layers, MlpImpl& mlp, absl::string_view what);
+
+// A tracker's exported networks rebuilt as modules, for re-exporting an older policy.pt with
+// today's script (skills() and act_with_z(), policy_export.h): the ModSkillPolicy (sizes,
+// attention or not, per-part or whole-body controllers and their input read from the tensors and
+// the spec) and its observation normalizer.
+struct RebuiltPolicy {
+  ModSkillPolicy policy{nullptr};
+  RunningMeanStd obs_norm{nullptr};
+};
+
+// `layout` is the server's for the policy's part_layout (LayoutFromWireSpec). INVALID_ARGUMENT
+// naming the file for a task policy, an affine policy or tensors that do not fit `layout`.
+absl::StatusOr<RebuiltPolicy> RebuildTracker(const ExportedPolicy& exported, const NetworkLayout& layout);
 
 }  // namespace modskill::learner
 

@@ -24,6 +24,7 @@
 #include "client/cpp/rollout_command.h"
 #include "client/cpp/simulate_command.h"
 #include "client/cpp/simulation_client.h"
+#include "client/cpp/skill_commands.h"
 #include "client/cpp/stats_command.h"
 
 ABSL_FLAG(std::string, server, "127.0.0.1:50051", "server address, host:port");
@@ -37,13 +38,21 @@ ABSL_FLAG(std::string, checkpoint, "",
           "or with --upload a local file whose bytes are sent");
 ABSL_FLAG(std::vector<std::string>, clip, {},
           "rollout, simulate: clip names, repeated or comma-separated (empty: every clip)");
-ABSL_FLAG(std::string, out, "", "rollout: write metrics, per-body errors (and frames) as JSON to this file");
+ABSL_FLAG(std::string, out, "",
+          "rollout: write metrics, per-body errors (and frames) as JSON to this file; skills, compose: the "
+          "directory to write skills.json, or compose.json and compose.html, into");
 ABSL_FLAG(bool, upload, true,
           "rollout: send the checkpoint file's bytes; false: send its path, which the server reads only from its "
           "--checkpoint_dir directories");
 ABSL_FLAG(std::string, html, "",
           "rollout: write a self-contained viewer page (the policy's character beside its reference, every clip) "
           "to this file");
+ABSL_FLAG(std::string, base, "", "compose: the clip the character tracks");
+ABSL_FLAG(std::string, source, "", "compose: the clip whose z the --parts take");
+ABSL_FLAG(std::vector<std::string>, parts, {}, "compose: part names of the checkpoint's layout, comma-separated");
+ABSL_FLAG(bool, interpolate, false,
+          "compose: interpolate the parts' z from the base clip's own (start) to the source's (end) instead of swapping");
+ABSL_FLAG(int, max_steps, 0, "skills, compose: steps per clip at most (0: the clip's length)");
 ABSL_FLAG(bool, frames, false, "rollout: stream per-frame simulated and reference body positions into --out");
 ABSL_FLAG(int, envs, 16, "simulate: envs in the session");
 ABSL_FLAG(int, steps, 100, "simulate: steps to take");
@@ -62,6 +71,11 @@ commands:
   add-motions FILE...              upload clips (.npz .bvh .txt .msclip) to the server's library
   rollout --checkpoint F [--clip NAME...] [--out F.json] [--upload] [--frames] [--html F.html]
                                    evaluate a TorchScript policy on clips (default: every clip)
+  skills --checkpoint F --clip NAME... --out DIR [--max_steps N]
+                                   record a tracker's per-part z on clips: DIR/skills.json with a 2-D PCA
+  compose --checkpoint F --base CLIP --source CLIP --parts NAME[,NAME] [--interpolate] --out DIR
+                                   the base clip with the parts' z from the source clip (swapped or
+                                   interpolated): DIR/compose.json and the viewer page DIR/compose.html
   simulate [--envs N] [--steps K] [--actions zero|random] [--seed S] [--part_layout L] [--clip NAME...]
                                    step a session and report env steps/s, reward, message sizes
 
@@ -154,6 +168,18 @@ int RunCommand(SimulationClient& client, const std::string& command, const std::
   if (command == "motions") return cli::Motions(client);
   if (command == "stats") return cli::Stats(client);
   if (command == "add-motions") return cli::AddMotions(client, operands);
+  if (command == "skills" || command == "compose") {
+    cli::SkillOptions options;
+    options.checkpoint = absl::GetFlag(FLAGS_checkpoint);
+    options.clips = clips;
+    options.out_dir = absl::GetFlag(FLAGS_out);
+    options.base = absl::GetFlag(FLAGS_base);
+    options.source = absl::GetFlag(FLAGS_source);
+    options.parts = absl::GetFlag(FLAGS_parts);
+    options.interpolate = absl::GetFlag(FLAGS_interpolate);
+    options.max_steps = absl::GetFlag(FLAGS_max_steps);
+    return command == "skills" ? cli::RecordSkills(client, options) : cli::Compose(client, options);
+  }
   if (command == "rollout") {
     cli::RolloutOptions options;
     options.checkpoint = absl::GetFlag(FLAGS_checkpoint);
@@ -192,7 +218,8 @@ int Main(int argc, char** argv) {
   const std::string command = args[1];
   const std::vector<std::string> operands(args.begin() + 2, args.end());
 
-  static const char* const kCommands[] = {"describe", "motions", "stats", "add-motions", "rollout", "simulate"};
+  static const char* const kCommands[] = {"describe", "motions", "stats", "add-motions", "rollout", "simulate",
+                                          "skills", "compose"};
   if (std::find(std::begin(kCommands), std::end(kCommands), command) == std::end(kCommands)) {
     return Usage(absl::StrCat("unknown command '", command, "'"));
   }
@@ -212,6 +239,17 @@ int Main(int argc, char** argv) {
     if (absl::GetFlag(FLAGS_frames) && absl::GetFlag(FLAGS_out).empty()) {
       return Usage("rollout: --frames needs --out (frames go to the JSON file)");
     }
+  }
+  if (command == "skills" || command == "compose") {
+    if (absl::GetFlag(FLAGS_checkpoint).empty()) return Usage(command + ": --checkpoint is required");
+    if (absl::GetFlag(FLAGS_out).empty()) return Usage(command + ": --out DIR is required");
+    if (absl::GetFlag(FLAGS_max_steps) < 0) return Usage("--max_steps must be >= 0");
+  }
+  if (command == "compose") {
+    if (absl::GetFlag(FLAGS_base).empty() || absl::GetFlag(FLAGS_source).empty()) {
+      return Usage("compose: --base and --source are required");
+    }
+    if (absl::GetFlag(FLAGS_parts).empty()) return Usage("compose: --parts is required (e.g. --parts R_Arm,L_Arm)");
   }
   if (command == "simulate") {
     if (absl::GetFlag(FLAGS_envs) < 1) return Usage("--envs must be >= 1");

@@ -92,7 +92,69 @@ absl::StatusOr<std::unique_ptr<PolicyCheckpoint>> PolicyCheckpoint::LoadBytes(ab
   auto spec = PolicySpec::FromJson(extra[kCheckpointSpecFile]);
   if (!spec.ok()) return absl::InvalidArgumentError(absl::StrCat("checkpoint: ", spec.status().message()));
   checkpoint->spec_ = *std::move(spec);
+  if (absl::Status probed = checkpoint->ProbeSkills(); !probed.ok()) return probed;
   return checkpoint;
+}
+
+absl::Status PolicyCheckpoint::ProbeSkills() {
+  if (!module_->find_method("skills") || !module_->find_method("act_with_z")) return absl::OkStatus();
+  // The exporter's name for the whole-body ablation's controller (learner/policy_export.h).
+  part_controllers_ = !module_->hasattr("whole_body_controller_fc0_weight");
+  try {
+    torch::NoGradGuard no_grad;
+    const torch::Tensor z = module_->get_method("skills")({torch::zeros({1, spec_.obs_size})}).toTensor();
+    if (z.dim() != 3 || z.size(0) != 1 || z.size(1) < 1 || z.size(2) < 1 || z.size(1) > 1024 || z.size(2) > 4096) {
+      return absl::InvalidArgumentError(absl::StrCat("checkpoint: skills() returned a ", z.dim(),
+                                                     "-d tensor, expected [n, parts, embed_dim]"));
+    }
+    skill_parts_ = static_cast<int>(z.size(1));
+    embed_dim_ = static_cast<int>(z.size(2));
+  } catch (const std::exception& e) {
+    std::string message = e.what();
+    return absl::InvalidArgumentError(absl::StrCat("checkpoint: skills() failed: ", message.substr(0, message.find('\n'))));
+  }
+  return absl::OkStatus();
+}
+
+absl::Status PolicyCheckpoint::CopyOut(const char* method, const at::Tensor& output, int n, int64_t row_size,
+                                       float* out) {
+  const torch::Tensor flat = output.to(torch::kFloat32).contiguous();
+  if (flat.dim() < 2 || flat.size(0) != n || flat.numel() != n * row_size) {
+    return absl::InvalidArgumentError(absl::StrCat("checkpoint: ", method, " returned ", flat.numel(),
+                                                   " values, expected ", n, " x ", row_size));
+  }
+  std::memcpy(out, flat.data_ptr<float>(), sizeof(float) * n * row_size);
+  return absl::OkStatus();
+}
+
+absl::Status PolicyCheckpoint::Skills(const float* obs, int n, float* z) {
+  if (!has_skills()) return absl::FailedPreconditionError("checkpoint: no skills() method (see has_skills)");
+  std::lock_guard<std::mutex> lock(mutex_);
+  try {
+    torch::NoGradGuard no_grad;
+    torch::Tensor input = torch::from_blob(const_cast<float*>(obs), {n, spec_.obs_size}, torch::kFloat32);
+    return CopyOut("skills()", module_->get_method("skills")({input}).toTensor(), n,
+                   int64_t{skill_parts_} * embed_dim_, z);
+  } catch (const std::exception& e) {
+    std::string message = e.what();
+    return absl::InvalidArgumentError(absl::StrCat("checkpoint: skills() failed: ", message.substr(0, message.find('\n'))));
+  }
+}
+
+absl::Status PolicyCheckpoint::ActWithZ(const float* obs, const float* z, int n, float* actions) {
+  if (!has_skills()) return absl::FailedPreconditionError("checkpoint: no act_with_z() method (see has_skills)");
+  std::lock_guard<std::mutex> lock(mutex_);
+  try {
+    torch::NoGradGuard no_grad;
+    torch::Tensor input = torch::from_blob(const_cast<float*>(obs), {n, spec_.obs_size}, torch::kFloat32);
+    torch::Tensor skills = torch::from_blob(const_cast<float*>(z), {n, skill_parts_, embed_dim_}, torch::kFloat32);
+    return CopyOut("act_with_z()", module_->get_method("act_with_z")({input, skills}).toTensor(), n,
+                   spec_.action_size, actions);
+  } catch (const std::exception& e) {
+    std::string message = e.what();
+    return absl::InvalidArgumentError(
+        absl::StrCat("checkpoint: act_with_z() failed: ", message.substr(0, message.find('\n'))));
+  }
 }
 
 absl::Status PolicyCheckpoint::Act(const float* obs, int n, float* actions) {

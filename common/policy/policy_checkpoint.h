@@ -17,6 +17,9 @@
 namespace torch::jit {
 struct Module;
 }  // namespace torch::jit
+namespace at {
+class Tensor;
+}  // namespace at
 
 namespace modskill {
 
@@ -43,10 +46,29 @@ class PolicyCheckpoint {
   // obs: [n, obs_size] -> actions: [n, action_size]; errors on bad output shape or values.
   absl::Status Act(const float* obs, int n, float* actions);
 
+  // Skill composition. A ModSkill policy exported since issue 13 (learner/policy_export.h) also
+  // defines skills(obs) -> z [n, P, E] and act_with_z(obs, z) -> actions; older archives and
+  // affine policies do not (has_skills() false, and the two calls FAILED_PRECONDITION).
+  bool has_skills() const { return skill_parts_ > 0; }
+  int skill_parts() const { return skill_parts_; }
+  int embed_dim() const { return embed_dim_; }
+  // Per-part controllers (not the whole-body ablation's one controller, whose input mixes every
+  // part's z).
+  bool has_part_controllers() const { return part_controllers_; }
+  // obs: [n, obs_size] -> z: [n, skill_parts, embed_dim].
+  absl::Status Skills(const float* obs, int n, float* z);
+  // obs: [n, obs_size], z: [n, skill_parts, embed_dim] -> actions: [n, action_size].
+  absl::Status ActWithZ(const float* obs, const float* z, int n, float* actions);
+
  private:
   PolicyCheckpoint() = default;
+  // Finds skills()' output shape by running it on one zero observation (no methods: stays 0).
+  absl::Status ProbeSkills();
+  absl::Status CopyOut(const char* method, const at::Tensor& output, int n, int64_t row_size, float* out);
   std::unique_ptr<torch::jit::Module> module_;
   PolicySpec spec_;
+  int skill_parts_ = 0, embed_dim_ = 0;
+  bool part_controllers_ = false;
   std::mutex mutex_;
 };
 

@@ -1,6 +1,9 @@
 // The Rollout RPC in phases: load the policy (a path inside --checkpoint_dir, or bytes), check it
 // fits this server's env and the request's action mode, resolve the clips and options, run the
-// clips, stream frames when asked and one metrics message per clip.
+// clips (plainly, with each frame's z, or composed: skill_rollout.h), stream frames when asked
+// and one metrics message per clip.
+#include <array>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -16,6 +19,7 @@
 #include "server/service/proto_conversions.h"
 #include "server/service/session_config_validation.h"
 #include "server/service/simulation_service.h"
+#include "server/service/skill_rollout.h"
 
 namespace modskill {
 namespace {
@@ -84,8 +88,15 @@ class FrameStreamer {
     out->set_mean_body_error_m(static_cast<float>(view.mean_body_error));
     out->set_done(view.done);
     out->set_terminated(view.terminated);
+    out->clear_skill_z();
+    if (view.skill_z != nullptr && skill_shape_[0] > 0) {
+      SetFloatTensor({skill_shape_[0], skill_shape_[1]}, view.skill_z, out->mutable_skill_z());
+    }
     client_gone_ = !writer_->Write(message_);
   }
+
+  // Frames carry z [parts, embed_dim] from now on (RolloutRequest.record_skills).
+  void set_skill_shape(int64_t parts, int64_t embed_dim) { skill_shape_ = {parts, embed_dim}; }
 
  private:
   grpc::ServerWriter<v1::RolloutResponse>* writer_;
@@ -105,8 +116,57 @@ class FrameStreamer {
 
   v1::RolloutResponse message_;
   std::vector<float> flat_;
+  std::array<int64_t, 2> skill_shape_{0, 0};
   bool client_gone_ = false;
 };
+
+// One Rollout's resolved inputs.
+struct RolloutRun {
+  std::shared_ptr<const HumanoidModel> humanoid;
+  const PartLayout* layout;
+  std::shared_ptr<const MotionLibrary> motions;
+  std::vector<int> clip_ids;
+  PolicyCheckpoint* checkpoint;
+  RolloutOptions options;
+  RolloutFrameCallback on_frame;
+  std::function<absl::Status()> check;  // fails once the client went away
+};
+
+std::vector<v1::ClipMetrics> ToWire(const std::vector<ClipRolloutMetrics>& metrics) {
+  std::vector<v1::ClipMetrics> out(metrics.size());
+  for (size_t i = 0; i < metrics.size(); ++i) ToProto(metrics[i], &out[i]);
+  return out;
+}
+
+// A plain rollout (forward), one with each frame's z (record_skills), or a composition.
+absl::StatusOr<std::vector<v1::ClipMetrics>> RunRequested(const v1::RolloutRequest& request, RolloutRun& run) {
+  if (request.has_composition()) {
+    auto composition = ToComposition(request.composition(), *run.layout, *run.motions);
+    if (!composition.ok()) return composition.status();
+    auto result = RunComposedRollout(run.humanoid, *run.layout, run.motions, SkillPolicyOf(*run.checkpoint, run.check),
+                                     *composition, run.options, run.on_frame);
+    if (!result.ok()) return result.status();
+    std::vector<v1::ClipMetrics> out = ToWire({result->metrics});
+    ToProto(*result, *composition, *run.layout, *run.motions, out[0].mutable_composition());
+    return out;
+  }
+  absl::StatusOr<std::vector<ClipRolloutMetrics>> metrics;
+  if (request.record_skills()) {
+    metrics = RunSkillRollout(run.humanoid, *run.layout, run.motions, run.clip_ids,
+                              SkillPolicyOf(*run.checkpoint, run.check), run.options, run.on_frame);
+  } else {
+    PolicyCheckpoint* checkpoint = run.checkpoint;
+    metrics = RunRollout(
+        run.humanoid, *run.layout, run.motions, run.clip_ids,
+        [&](const float* obs, int n, float* actions) -> absl::Status {
+          if (absl::Status status = run.check(); !status.ok()) return status;
+          return checkpoint->Act(obs, n, actions);
+        },
+        run.options, run.on_frame);
+  }
+  if (!metrics.ok()) return metrics.status();
+  return ToWire(*metrics);
+}
 
 }  // namespace
 
@@ -131,29 +191,29 @@ grpc::Status SimulationService::Rollout(grpc::ServerContext* context, const v1::
   absl::StatusOr<RolloutOptions> options = RolloutOptionsFor(*request, trained.action);
   if (!options.ok()) return ToGrpcStatus(options.status());
   options->task = *task;
+  if (absl::Status status = CheckSkillRequest(*request, **policy, *task); !status.ok()) return ToGrpcStatus(status);
   std::shared_ptr<const MotionLibrary> motions = motions_.Snapshot();
   absl::StatusOr<std::vector<int>> clip_ids = RolloutClipIds(*request, *motions);
   if (!clip_ids.ok()) return ToGrpcStatus(clip_ids.status());
+  if (request->has_composition()) clip_ids = std::vector<int>{motions->Find(request->composition().base_clip())};
 
   FrameStreamer frames(writer, *motions, *clip_ids);
-  RolloutFrameCallback on_frame = nullptr;
+  if (request->record_skills()) frames.set_skill_shape((*policy)->skill_parts(), (*policy)->embed_dim());
+  RolloutRun run{humanoid_, &*layout, motions, *clip_ids, policy->get(), *options, nullptr, nullptr};
   if (request->stream_frames()) {
-    on_frame = [&frames](const RolloutFrameView& view) { frames.Write(view); };
+    run.on_frame = [&frames](const RolloutFrameView& view) { frames.Write(view); };
   }
-  PolicyCheckpoint* checkpoint = policy->get();
-  auto metrics = RunRollout(
-      humanoid_, *layout, motions, *clip_ids,
-      [&](const float* obs, int n, float* actions) -> absl::Status {
-        if (context->IsCancelled() || frames.client_gone()) return absl::CancelledError("rollout: the client went away");
-        return checkpoint->Act(obs, n, actions);
-      },
-      *options, on_frame);
+  run.check = [&]() -> absl::Status {
+    if (context->IsCancelled() || frames.client_gone()) return absl::CancelledError("rollout: the client went away");
+    return absl::OkStatus();
+  };
+  auto metrics = RunRequested(*request, run);
   if (!metrics.ok()) return ToGrpcStatus(metrics.status());
   int successes = 0;
-  for (const ClipRolloutMetrics& clip : *metrics) {
+  for (const v1::ClipMetrics& clip : *metrics) {
     v1::RolloutResponse message;
-    ToProto(clip, message.mutable_metrics());
-    successes += clip.success;
+    *message.mutable_metrics() = clip;
+    successes += clip.success();
     if (!writer->Write(message)) break;
   }
   LogLine("rollout by %s: %d clips, %d succeeded", context->peer(), static_cast<int>(metrics->size()), successes);

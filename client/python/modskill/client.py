@@ -97,6 +97,12 @@ def _set_frames(result: ClipRollout, rows: Sequence[pb.RolloutFrame]) -> None:
     result.body_error_m = np.array([row.mean_body_error_m for row in rows], dtype=np.float32)
     result.done = np.array([row.done for row in rows], dtype=np.bool_)
     result.terminated = np.array([row.terminated for row in rows], dtype=np.bool_)
+    z_rows = [tensors.decode_field(row, "skill_z") for row in rows]
+    shapes = {z.shape for z in z_rows if z is not None and z.size > 0}
+    if len(shapes) == 1:
+        (shape,) = shapes
+        result.skill_z = np.stack([z if z is not None and z.size > 0 else np.full(shape, np.nan, np.float32)
+                                   for z in z_rows]).astype(np.float32)
 
 
 class Client:
@@ -242,7 +248,8 @@ class Client:
                 clips: Sequence[str] = (), frames: bool = False, *, server_checkpoint: Optional[str] = None,
                 termination: Union[str, int] = "evaluation", termination_distance: float = 0.0,
                 max_steps_per_clip: int = 0, action_mode: Optional[Union[str, int]] = None,
-                timeout: Optional[float] = None) -> List[ClipRollout]:
+                timeout: Optional[float] = None, record_skills: bool = False,
+                composition: Optional[pb.SkillComposition] = None) -> List[ClipRollout]:
         """Runs a TorchScript policy checkpoint on clips and returns one :class:`ClipRollout` per clip.
 
         Give exactly one of:
@@ -264,16 +271,21 @@ class Client:
           action_mode: None runs the policy in the mode recorded in its checkpoint; "absolute" or
             "residual" insists on one (a checkpoint trained in the other is refused).
           timeout: deadline in seconds (default: none).
+          record_skills: also return each row's z (``ClipRollout.skill_z``; implies frames).
+          composition: a ``SkillComposition`` (``compose`` builds one); clips must then be empty.
         """
         given = [x is not None for x in (checkpoint, checkpoint_bytes, server_checkpoint)]
         if sum(given) != 1:
             raise ValueError("rollout: pass exactly one of checkpoint, checkpoint_bytes, server_checkpoint")
         if isinstance(clips, str):
             clips = [clips]
-        request = pb.RolloutRequest(clips=list(clips), stream_frames=bool(frames),
+        frames = bool(frames or record_skills)
+        request = pb.RolloutRequest(clips=list(clips), stream_frames=frames, record_skills=bool(record_skills),
                                     termination=_enum(termination, _TERMINATION, "termination"),
                                     termination_distance=termination_distance,
                                     max_steps_per_clip=max_steps_per_clip)
+        if composition is not None:
+            request.composition.CopyFrom(composition)
         if action_mode is not None:
             request.action_mode = _enum(action_mode, _ACTION_MODE, "action_mode")
         if checkpoint is not None:
@@ -298,6 +310,33 @@ class Client:
             for result in results:
                 _set_frames(result, frame_rows.get(result.clip, []))
         return results
+
+    def record_skills(self, checkpoint: PathLike, clips: Sequence[str] = (), max_steps_per_clip: int = 0,
+                      timeout: Optional[float] = None) -> List[ClipRollout]:
+        """A ModSkill tracker's z on clips: one :class:`ClipRollout` per clip with frames and
+        ``skill_z`` float32 [T, num_parts, embed_dim] (NaN on the last row). The checkpoint must
+        export skills() and act_with_z() (ServerError FAILED_PRECONDITION otherwise; older
+        policies are re-exported with ``modskill-policy-upgrade``)."""
+        return self.rollout(checkpoint, clips=clips, record_skills=True, max_steps_per_clip=max_steps_per_clip,
+                            timeout=timeout)
+
+    def compose(self, checkpoint: PathLike, base: str, source: str, parts: Union[str, Sequence[str]],
+                interpolate: bool = False, max_steps_per_clip: int = 0,
+                timeout: Optional[float] = None) -> ClipRollout:
+        """Skill composition: rolls out clip ``base`` with the z of ``parts`` (names of the
+        checkpoint's part layout, e.g. "R_Arm") taken from clip ``source``, step for step, or with
+        ``interpolate`` blended from the base's own z (first step) to the source's (last step) and
+        normalized back to the sphere. Returns the base clip's :class:`ClipRollout` with frames,
+        ``skill_z`` (the composed z) and ``composition`` (the server's report)."""
+        if isinstance(parts, str):
+            parts = [parts]
+        composition = pb.SkillComposition(base_clip=base, source_clip=source, parts=list(parts),
+                                          mode=pb.INTERPOLATE if interpolate else pb.SWAP)
+        results = self.rollout(checkpoint, record_skills=True, composition=composition,
+                               max_steps_per_clip=max_steps_per_clip, timeout=timeout)
+        if len(results) != 1:
+            raise ValueError(f"compose: the server sent {len(results)} clip results, expected 1")
+        return results[0]
 
     def session(self, num_envs: int, seed: int = 0, part_layout: str = "", motions: Sequence[str] = (),
                 termination: Union[str, int] = "training", amp_obs: Union[str, int] = "full", *,

@@ -8,7 +8,7 @@ layout changes.
 from __future__ import annotations
 
 import dataclasses
-from typing import Dict, List, Optional, Tuple
+from typing import Any, Dict, List, Optional, Tuple
 
 import numpy as np
 
@@ -262,6 +262,13 @@ class ClipRollout:
     body_error_m: Optional[np.ndarray] = None  # float32 [T], mean body error per row
     done: Optional[np.ndarray] = None  # bool [T], the clip's last row
     terminated: Optional[np.ndarray] = None  # bool [T], ... ended by termination
+    # With record_skills (Client.record_skills, Client.compose): float32 [T, num_parts, embed_dim],
+    # the z the policy acted on from each row (unit norm per part); NaN on the last row, from
+    # which no action is taken.
+    skill_z: Optional[np.ndarray] = None
+    # A composed rollout's report (Client.compose): source_clip, parts, mode, source_steps,
+    # source_terminated, held_steps (base steps that used the source's last z).
+    composition: Optional[Dict[str, Any]] = None
 
     @classmethod
     def from_proto(cls, metrics: pb.ClipMetrics) -> "ClipRollout":
@@ -275,6 +282,14 @@ class ClipRollout:
             vel_error_mm=metrics.vel_error_mm,
             body_error_mm=np.array(metrics.body_error_mm, dtype=np.float64),
             part_error_mm=np.array(metrics.part_error_mm, dtype=np.float64),
+            composition=None if not metrics.HasField("composition") else {
+                "source_clip": metrics.composition.source_clip,
+                "parts": list(metrics.composition.parts),
+                "mode": pb.CompositionMode.Name(metrics.composition.mode),
+                "source_steps": metrics.composition.source_steps,
+                "source_terminated": metrics.composition.source_terminated,
+                "held_steps": metrics.composition.held_steps,
+            },
         )
 
     def body_errors(self) -> np.ndarray:

@@ -69,14 +69,12 @@ double PossibleSteps(const RolloutOptions& options, const MotionClip& clip) {
   return std::max(1, steps);
 }
 
-}  // namespace
-
-absl::StatusOr<std::vector<ClipRolloutMetrics>> RunRollout(std::shared_ptr<const HumanoidModel> humanoid,
-                                                           const PartLayout& layout,
-                                                           std::shared_ptr<const MotionLibrary> motions,
-                                                           const std::vector<int>& clip_ids,
-                                                           const PolicyFunction& policy, const RolloutOptions& options,
-                                                           const RolloutFrameCallback& on_frame) {
+// Creates the rollout's envs, one per clip, reset to each clip's first frame.
+absl::StatusOr<std::unique_ptr<EnvBatch>> RolloutBatch(std::shared_ptr<const HumanoidModel> humanoid,
+                                                       const PartLayout& layout,
+                                                       std::shared_ptr<const MotionLibrary> motions,
+                                                       const std::vector<int>& clip_ids,
+                                                       const RolloutOptions& options) {
   if (clip_ids.empty()) return absl::InvalidArgumentError("clips: none to roll out");
   for (int id : clip_ids) {
     if (id < 0 || id >= motions->size()) return absl::NotFoundError(absl::StrCat("clips: no clip with index ", id));
@@ -95,16 +93,30 @@ absl::StatusOr<std::vector<ClipRolloutMetrics>> RunRollout(std::shared_ptr<const
   config.physics = options.physics;
   auto created = EnvBatch::Create(config, humanoid, layout, motions);
   if (!created.ok()) return created.status();
+  for (int i = 0; i < (*created)->num_envs(); ++i) (*created)->env(i).ResetTo(clip_ids[i], 0, (*created)->row(i));
+  return created;
+}
+
+}  // namespace
+
+absl::StatusOr<std::vector<ClipRolloutMetrics>> RunRollout(std::shared_ptr<const HumanoidModel> humanoid,
+                                                           const PartLayout& layout,
+                                                           std::shared_ptr<const MotionLibrary> motions,
+                                                           const std::vector<int>& clip_ids,
+                                                           const PolicyFunction& policy, const RolloutOptions& options,
+                                                           const RolloutFrameCallback& on_frame,
+                                                           const FrameSkills& frame_skills) {
+  auto created = RolloutBatch(humanoid, layout, motions, clip_ids, options);
+  if (!created.ok()) return created.status();
   EnvBatch& batch = **created;
   const int n = batch.num_envs();
-  for (int i = 0; i < n; ++i) batch.env(i).ResetTo(clip_ids[i], 0, batch.row(i));
-
   std::vector<Trajectory> trajectories(n);
   std::vector<bool> terminated(n, false);
   HumanoidState sim, ref;
   sim.Resize(humanoid->num_bodies(), humanoid->num_hinges());
   ref.Resize(humanoid->num_bodies(), humanoid->num_hinges());
-  auto record = [&](int i, bool is_done, bool is_terminated) {
+  // Measures env i's current frame and shows it with the z the policy acted on from it.
+  auto record = [&](int i, bool is_done, bool is_terminated, const float* z) {
     const MotionClip& clip = motions->clip(clip_ids[i]);
     ReadSimulatedState(*humanoid, batch.env(i).data(), &sim);
     ReadReferenceState(clip, batch.env(i).frame(), &ref);
@@ -113,9 +125,8 @@ absl::StatusOr<std::vector<ClipRolloutMetrics>> RunRollout(std::shared_ptr<const
     double mean = 0;
     for (size_t b = 0; b < sim.body_pos.size(); ++b) mean += (sim.body_pos[b] - ref.body_pos[b]).norm() / sim.body_pos.size();
     trajectories[i].worst_mean_error = std::max(trajectories[i].worst_mean_error, mean);
-    if (on_frame) on_frame({i, batch.env(i).frame(), sim, ref, mean, is_done, is_terminated});
+    if (on_frame) on_frame({i, batch.env(i).frame(), sim, ref, mean, is_done, is_terminated, z});
   };
-  for (int i = 0; i < n; ++i) record(i, false, false);
 
   std::vector<float> actions(static_cast<size_t>(n) * batch.spec().action_size);
   std::vector<bool> finished(n, false);
@@ -124,20 +135,22 @@ absl::StatusOr<std::vector<ClipRolloutMetrics>> RunRollout(std::shared_ptr<const
   int remaining = n;
   while (remaining > 0) {
     if (auto status = policy(batch.buffers().obs.data(), n, actions.data()); !status.ok()) return status;
+    // The frames the policy just acted on (the state has not moved since the last step).
+    for (int i = 0; i < n; ++i) {
+      if (!finished[i]) record(i, false, false, frame_skills.z ? frame_skills.z + i * frame_skills.z_size : nullptr);
+    }
     if (auto status = batch.Step(actions); !status.ok()) {
       return absl::InvalidArgumentError(absl::StrCat("policy output: ", status.message()));
     }
     for (int i = 0; i < n; ++i) {
       if (finished[i]) continue;
-      const bool done = batch.buffers().done[i];
       // Every column but the last, energy.
       for (int64_t t = 0; t + 1 < terms; ++t) task_return[i] += batch.buffers().reward_terms[i * terms + t];
-      terminated[i] = done && !batch.buffers().truncated[i];
-      record(i, done, terminated[i]);
-      if (done) {
-        finished[i] = true;
-        --remaining;
-      }
+      if (!batch.buffers().done[i]) continue;
+      terminated[i] = !batch.buffers().truncated[i];
+      record(i, true, terminated[i], nullptr);
+      finished[i] = true;
+      --remaining;
     }
   }
   std::vector<ClipRolloutMetrics> metrics;

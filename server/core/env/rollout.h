@@ -60,18 +60,31 @@ struct RolloutFrameView {
   double mean_body_error = 0;  // m
   bool done = false;           // the clip's last frame in this rollout
   bool terminated = false;     // done by termination (not at the clip's end)
+  // The skill embeddings the policy acted on from this frame (FrameSkills.z_size floats), or
+  // null: without FrameSkills, and on the last frame (no action is taken from it).
+  const float* skill_z = nullptr;
 };
 
-// Called for every simulated frame of every clip when set, the first frame included.
+// Where a policy leaves the skill embeddings z it acted on at its latest call: z_size floats per
+// env, [num_envs, z_size] (e.g. [num_envs, parts, embed_dim]), rewritten by every call.
+struct FrameSkills {
+  const float* z = nullptr;
+  int64_t z_size = 0;
+};
+
+// Called for every simulated frame of every clip when set, the first frame included. A frame
+// is reported once the policy has acted on it (so that its z is known), the last one at once.
 using RolloutFrameCallback = std::function<void(const RolloutFrameView&)>;
 
-// Rolls out every clip of `clip_ids` (indices into `motions`) in parallel envs.
+// Rolls out every clip of `clip_ids` (indices into `motions`) in parallel envs. With
+// `frame_skills.z` set, each frame shows the z the policy left there when it acted on it.
 absl::StatusOr<std::vector<ClipRolloutMetrics>> RunRollout(std::shared_ptr<const HumanoidModel> humanoid,
                                                            const PartLayout& layout,
                                                            std::shared_ptr<const MotionLibrary> motions,
                                                            const std::vector<int>& clip_ids,
                                                            const PolicyFunction& policy, const RolloutOptions& options,
-                                                           const RolloutFrameCallback& on_frame = nullptr);
+                                                           const RolloutFrameCallback& on_frame = nullptr,
+                                                           const FrameSkills& frame_skills = {});
 
 }  // namespace modskill
 
