@@ -1,6 +1,7 @@
 #include "learner/server_pool.h"
 
 #include <algorithm>
+#include <set>
 
 #include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
@@ -8,13 +9,56 @@
 
 namespace modskill::learner {
 
-ServerPool::ServerPool(ServerPoolOptions options) : options_(std::move(options)) {
-  for (const std::string& server : options_.servers) {
+ServerPool::ServerPool(ServerPoolOptions options, ServerDiscovery discovery)
+    : options_(std::move(options)), discovery_(std::move(discovery)) {}
+
+absl::StatusOr<std::unique_ptr<ServerPool>> ServerPool::Create(ServerPoolOptions options) {
+  absl::StatusOr<ServerDiscovery> discovery = ServerDiscovery::Create(options.servers, options.discovery);
+  if (!discovery.ok()) return discovery.status();
+  return std::unique_ptr<ServerPool>(new ServerPool(std::move(options), *std::move(discovery)));
+}
+
+SessionSlot* ServerPool::FreeSlot(const std::string& server, int index) {
+  SessionSlot* free = nullptr;
+  for (auto& slot : slots_) {
+    if (!slot->retired || slot->index_on_server != index) continue;
+    if (slot->server == server) return slot.get();
+    if (free == nullptr) free = slot.get();
+  }
+  if (free != nullptr) return free;
+  slots_.push_back(std::make_unique<SessionSlot>());
+  slots_.back()->index_on_server = index;
+  return slots_.back().get();
+}
+
+void ServerPool::UpdateMembers(const std::vector<ServerMember>& members) {
+  std::set<std::string> wanted, present;
+  for (const ServerMember& member : members) wanted.insert(member.address);
+  for (auto& slot : slots_) {
+    if (slot->retired) continue;
+    if (wanted.count(slot->server) != 0) {
+      present.insert(slot->server);
+      continue;
+    }
+    if (slot->index_on_server == 0) LogLine("server %s: left the --servers membership, dropped", slot->server);
+    slot->retired = true;
+    slot->alive = false;
+    slot->stream.reset();
+    slot->client.reset();
+  }
+  for (const ServerMember& member : members) {
+    if (!present.insert(member.address).second) continue;
+    if (member.address != member.source) LogLine("server %s: joined (from --servers %s)", member.address, member.source);
     for (int s = 0; s < options_.sessions_per_server; ++s) {
-      auto slot = std::make_unique<SessionSlot>();
-      slot->server = server;
-      slot->index_on_server = s;
-      slots_.push_back(std::move(slot));
+      SessionSlot* slot = FreeSlot(member.address, s);
+      slot->server = member.address;
+      slot->tls_server_name = member.tls_server_name;
+      slot->retired = false;
+      slot->alive = false;
+      slot->retry_at = absl::InfinitePast();
+      slot->backoff = absl::Seconds(1);
+      slot->failures = 0;
+      slot->last_error.clear();
     }
   }
 }
@@ -25,6 +69,7 @@ absl::Status ServerPool::Open(SessionSlot* slot, int64_t seed) {
     client.server = slot->server;
     client.token = options_.token;
     client.tls_ca_file = options_.tls_ca_file;
+    client.tls_server_name = slot->tls_server_name;
     client.connect_timeout = options_.connect_timeout;
     auto connected = SimulationClient::Connect(client);
     if (!connected.ok()) return connected.status();
@@ -58,9 +103,10 @@ absl::Status ServerPool::Open(SessionSlot* slot, int64_t seed) {
 }
 
 int ServerPool::Reconnect(int64_t seed) {
+  UpdateMembers(discovery_.Refresh());
   const absl::Time now = absl::Now();
   for (auto& slot : slots_) {
-    if (slot->alive || now < slot->retry_at) continue;
+    if (slot->retired || slot->alive || now < slot->retry_at) continue;
     if (absl::Status status = Open(slot.get(), seed); !status.ok()) {
       MarkDead(slot.get(), status);
       continue;

@@ -1,7 +1,8 @@
 // The simulation servers one learner drives: a session per server (or two per server, each with
 // half of its envs, so that one half steps while the learner computes the other's actions).
 // A server that dies is dropped from the iteration, retried with exponential backoff, and
-// rejoins when it answers again.
+// rejoins when it answers again. The members come from server discovery (server_discovery.h),
+// refreshed at each Reconnect: members that join get sessions, members that vanish are dropped.
 #ifndef MODSKILL_LEARNER_SERVER_POOL_H_
 #define MODSKILL_LEARNER_SERVER_POOL_H_
 
@@ -12,11 +13,12 @@
 #include "absl/status/statusor.h"
 #include "absl/time/time.h"
 #include "client/cpp/simulation_client.h"
+#include "learner/server_discovery.h"
 
 namespace modskill::learner {
 
 struct ServerPoolOptions {
-  std::vector<std::string> servers;  // host:port
+  std::vector<std::string> servers;  // --servers entries: host:port, dns:///name:port, file:///path
   std::string token;
   std::string tls_ca_file;
   int envs_per_server = 256;
@@ -24,11 +26,16 @@ struct ServerPoolOptions {
   v1::SessionConfig session;    // num_envs is set per session
   absl::Duration connect_timeout = absl::Seconds(3);
   absl::Duration max_backoff = absl::Seconds(30);
+  DiscoveryOptions discovery;
 };
 
 struct SessionSlot {
   std::string server;
+  std::string tls_server_name;  // a discovered member's DNS name, which its certificate must carry
   int index_on_server = 0;
+  // The server left the membership: no session, no retries; the slot is kept (the trainer keys its
+  // bookkeeping by slot) and reused when a server joins.
+  bool retired = false;
   std::unique_ptr<SimulationClient> client;
   std::unique_ptr<SimulationStream> stream;
   bool alive = false;
@@ -42,9 +49,11 @@ struct SessionSlot {
 
 class ServerPool {
  public:
-  explicit ServerPool(ServerPoolOptions options);
+  // INVALID_ARGUMENT for a bad --servers entry or server file (server_discovery.h).
+  static absl::StatusOr<std::unique_ptr<ServerPool>> Create(ServerPoolOptions options);
 
-  // Opens every session that is due for a (re)try; returns how many are alive.
+  // Refreshes the membership, then opens every session that is due for a (re)try; returns how many
+  // are alive. Call it only while no collection uses the slots (between iterations).
   int Reconnect(int64_t seed);
   // Marks a slot dead after an error and schedules its retry.
   void MarkDead(SessionSlot* slot, const absl::Status& error);
@@ -53,11 +62,20 @@ class ServerPool {
   // The env spec of the first session that ever opened (all servers must agree).
   const v1::EnvSpec* spec() const { return have_spec_ ? &spec_ : nullptr; }
   int total_envs() const;
+  // Why a --servers entry lists no server right now (a name that does not resolve, an unreadable
+  // file), one line per entry; empty when every entry was read.
+  std::vector<std::string> discovery_problems() const { return discovery_.problems(); }
 
  private:
+  ServerPool(ServerPoolOptions options, ServerDiscovery discovery);
   absl::Status Open(SessionSlot* slot, int64_t seed);
+  // Retires the slots of servers not in `members` and gives each new member its sessions.
+  void UpdateMembers(const std::vector<ServerMember>& members);
+  // A slot for session `index` of a joining server: its own retired one, another retired one, or new.
+  SessionSlot* FreeSlot(const std::string& server, int index);
 
   ServerPoolOptions options_;
+  ServerDiscovery discovery_;
   std::vector<std::unique_ptr<SessionSlot>> slots_;
   v1::EnvSpec spec_;
   bool have_spec_ = false;

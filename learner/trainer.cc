@@ -68,7 +68,9 @@ absl::StatusOr<std::unique_ptr<Trainer>> Trainer::Create(const TrainerConfig& co
   if (!IsTrackingTask(config.task)) {
     if (absl::Status status = trainer->PrepareTask(); !status.ok()) return status;
   }
-  trainer->servers_ = std::make_unique<ServerPool>(trainer->PoolOptions());
+  absl::StatusOr<std::unique_ptr<ServerPool>> pool = ServerPool::Create(trainer->PoolOptions());
+  if (!pool.ok()) return pool.status();
+  trainer->servers_ = *std::move(pool);
   if (absl::Status status = trainer->WaitForServers(); !status.ok()) return status;
   if (absl::Status status = trainer->BuildNetworks(*trainer->servers_->spec()); !status.ok()) return status;
   const std::string checkpoint = config.run_dir + "/checkpoint.pt";
@@ -119,7 +121,10 @@ absl::Status Trainer::WaitForServers() {
     const absl::Duration waited = absl::Now() - start;
     if (waited > absl::Seconds(config_.server_timeout_s)) {
       std::string tried;
-      for (const auto& slot : servers_->slots()) absl::StrAppend(&tried, "\n  ", slot->server, ": ", slot->last_error);
+      for (const auto& slot : servers_->slots()) {
+        if (!slot->retired) absl::StrAppend(&tried, "\n  ", slot->server, ": ", slot->last_error);
+      }
+      for (const std::string& problem : servers_->discovery_problems()) absl::StrAppend(&tried, "\n  ", problem);
       return absl::UnavailableError(absl::StrCat("no simulation server answered for ",
                                                  absl::FormatDuration(waited), " (--server_timeout_s):", tried));
     }

@@ -7,6 +7,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
+#include "learner/server_discovery.h"
 
 namespace modskill::learner {
 namespace {
@@ -80,6 +81,7 @@ absl::Status TrainerConfig::Validate() const {
     return absl::InvalidArgumentError(absl::StrCat("--", field, ": ", value, " ", why));
   };
   if (servers.empty()) return absl::InvalidArgumentError("--servers: no server given");
+  if (absl::Status status = ValidateServerSpecs(servers); !status.ok()) return status;
   if (envs_per_server < 1) return bad("envs_per_server", envs_per_server, "must be >= 1");
   if (sessions_per_server < 1 || sessions_per_server > envs_per_server) {
     return bad("sessions_per_server", sessions_per_server, "must be in [1, envs_per_server]");

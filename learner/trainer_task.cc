@@ -7,6 +7,7 @@
 #include "absl/strings/str_join.h"
 #include "absl/time/clock.h"
 #include "common/log.h"
+#include "learner/server_discovery.h"
 #include "learner/trainer.h"
 #include "learner/trainer_phases.h"
 
@@ -16,8 +17,10 @@ namespace {
 // Describe's tracking spec for `config`'s part layout from the first server, retried (like
 // WaitForServers) until config.server_timeout_s while the server is not up.
 absl::StatusOr<v1::EnvSpec> DescribeFirstServer(const TrainerConfig& config) {
+  absl::StatusOr<std::string> first = FirstServerTarget(config.servers);
+  if (!first.ok()) return first.status();
   ClientOptions options;
-  options.server = config.servers.front();
+  options.server = *first;
   options.token = config.token;
   options.tls_ca_file = config.tls_ca_file;
   options.connect_timeout = absl::Seconds(3);

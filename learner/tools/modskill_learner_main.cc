@@ -1,7 +1,7 @@
 // modskill-learner: trains a ModSkill policy against one or many simulation servers, or
 // evaluates a trained one (--eval).
 //
-//   modskill-learner --servers host:port[,host:port...] --run_dir DIR --preset small|paper --iterations N
+//   modskill-learner --servers host:port|dns:///name:port|file:///path[,...] --run_dir DIR --preset small|paper --iterations N
 //   modskill-learner --eval --checkpoint DIR/policy.pt --servers host:port [--clips a,b] [--eval_out DIR]
 //
 // Skill reuse: --task steer|reach|strike|vr_tracking --skills TRACKER/policy.pt trains a task
@@ -25,6 +25,7 @@
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "absl/strings/str_join.h"
 #include "absl/strings/str_split.h"
 #include "absl/time/clock.h"
 #include "common/atomic_file.h"
@@ -34,12 +35,15 @@
 #include "common/wire/policy_enums.h"
 #include "learner/evaluation.h"
 #include "learner/policy_import.h"
+#include "learner/server_discovery.h"
 #include "learner/skill_library.h"
 #include "learner/task_evaluation.h"
 #include "learner/tensorboard_writer.h"
 #include "learner/trainer.h"
 
-ABSL_FLAG(std::vector<std::string>, servers, {}, "simulation servers, host:port, comma-separated");
+ABSL_FLAG(std::vector<std::string>, servers, {},
+          "simulation servers, comma-separated: host:port, dns:///name:port (every address behind the name, "
+          "re-resolved each iteration), file:///path (one host:port per line, re-read when it changes)");
 ABSL_FLAG(std::string, run_dir, "", "where checkpoints, the exported policy and logs go");
 ABSL_FLAG(std::string, preset, "small", "network and optimizer sizes: small (2-core CPU) or paper");
 ABSL_FLAG(int, iterations, 100, "PPO iterations to run (after those of a resumed run)");
@@ -141,8 +145,10 @@ void WriteEvalPage(RolloutViewerRecorder& page, std::string title, const std::st
 // --eval_out, or the checkpoint's directory.
 // --eval talks to the first of --servers.
 absl::StatusOr<std::unique_ptr<SimulationClient>> ConnectToFirstServer(const std::string& token) {
+  absl::StatusOr<std::string> first = FirstServerTarget(absl::GetFlag(FLAGS_servers));
+  if (!first.ok()) return first.status();
   ClientOptions options;
-  options.server = absl::GetFlag(FLAGS_servers)[0];
+  options.server = *first;
   options.token = token;
   options.tls_ca_file = absl::GetFlag(FLAGS_tls_ca);
   return SimulationClient::Connect(options);
@@ -493,8 +499,8 @@ int RunTraining(const std::string& token) {
   reporter.first = (*trainer)->iteration();
   reporter.last = reporter.first + config->iterations;
   const TrainerConfig& used = (*trainer)->config();  // a task run's sizes and action mode are its skills'
-  LogLine("training %s preset on %d server(s), %d envs each, task %s, layout %s%s%s, %s actions, run dir %s",
-          used.model.preset, static_cast<int>(used.servers.size()), used.envs_per_server, used.task, used.part_layout,
+  LogLine("training %s preset on --servers %s, %d envs each, task %s, layout %s%s%s, %s actions, run dir %s",
+          used.model.preset, absl::StrJoin(used.servers, ","), used.envs_per_server, used.task, used.part_layout,
           used.model.whole_body ? ", whole-body controller" : "", used.model.attention ? "" : ", no attention",
           used.action_mode, used.run_dir);
   absl::Status status = (*trainer)->Run([&](const IterationStats& s) { reporter.Report(s); }, &g_stop);
