@@ -124,6 +124,23 @@ TEST(TaskSpecTest, GoalTaskReferenceFeaturesAreTrackingsOnTheReference) {
   }
 }
 
+// The base motion loops on at frame 1 (the clip's own step from 0 to 1 follows its last frame).
+TEST(TaskSpecTest, GoalTaskBaseMotionLoopsOnAtFrameOne) {
+  auto steer = MakeBatch(TaskConfig(TaskKind::kSteer, 1));
+  ASSERT_TRUE(steer);
+  const int walk = ClipIndex("deepmimic_walk");
+  const int last = DefaultMotions()->clip(walk).num_frames - 1;
+  steer->env(0).ResetTo(walk, last - 1, steer->row(0));
+  const std::vector<float> zeros(69, 0.f);
+  std::vector<int> frames;
+  for (int step = 0; step < 3; ++step) {
+    ASSERT_TRUE(steer->Step(zeros).ok());
+    if (steer->buffers().done[0]) break;
+    frames.push_back(steer->buffers().frame[0]);
+  }
+  EXPECT_EQ(frames, (std::vector<int>{last, 1, 2}));
+}
+
 // The anchor carries the next frame onto the character: a target equal to the anchor lands on
 // the character's root (x, y) facing its heading, at the clip's own height, and a body's offset
 // from the root turns with the heading.

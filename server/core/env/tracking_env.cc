@@ -77,7 +77,9 @@ TrackingErrors TrackingEnv::CurrentTrackingTerms(float* terms) {
 
 int TrackingEnv::NextFrame() const {
   const int last = motion_->num_frames - 1;
-  if (goal_task_ != nullptr) return frame_ >= last ? 0 : frame_ + 1;
+  // A goal task's base motion loops. It goes on at frame 1: the step from frame 0 to 1 is one the
+  // clip has, so the anchored reference (WriteObservation) moves as the clip does across the seam.
+  if (goal_task_ != nullptr) return frame_ >= last ? std::min(1, last) : frame_ + 1;
   return std::min(frame_ + 1, last);
 }
 
@@ -243,8 +245,7 @@ void TrackingEnv::WriteObservation(EnvRow row) {
   float* obs = &out.obs[static_cast<size_t>(i) * spec.obs_size];
   ReadSimulatedState(*context_->humanoid, data_, &sim_);
   if (goal_task_ != nullptr) {
-    // The base motion's next frame, carried onto the character from the frame before it (at
-    // the loop's seam that is frame 0 itself: one step without displacement).
+    // The base motion's next frame, carried onto the character from the frame before it.
     const int next_frame = NextFrame();
     ReadReferenceState(motion, next_frame, &target_);
     ReadReferenceState(motion, std::max(next_frame - 1, 0), &reference_);
