@@ -163,6 +163,25 @@ TEST(SkillExportTest, AnOldExportHasNoSkillsAndIsReexportedWithThem) {
   EXPECT_TRUE((*reloaded)->has_skills());
 }
 
+// A skills() that returns no [n, parts, embed_dim] leaves forward usable and composition refused.
+TEST(SkillExportTest, ABrokenSkillsMethodCostsCompositionOnly) {
+  auto bytes = AffinePolicyBytes(PolicySpecForEnv(SpecsOf("5part").env), {}, {});
+  ASSERT_TRUE(bytes.ok());
+  torch::jit::ExtraFilesMap extra{{kCheckpointSpecFile, ""}};
+  std::istringstream in(*bytes, std::ios::binary);
+  torch::jit::Module module = torch::jit::load(in, torch::kCPU, extra);
+  module.define("def skills(self, obs):\n    return obs\ndef act_with_z(self, obs, z):\n    return self.forward(obs)\n");
+  std::ostringstream out(std::ios::binary);
+  module.save(out, extra);
+  auto checkpoint = PolicyCheckpoint::LoadBytes(out.str());
+  ASSERT_TRUE(checkpoint.ok()) << checkpoint.status();
+  EXPECT_FALSE((*checkpoint)->has_skills());
+  EXPECT_THAT(std::string((*checkpoint)->skills_error().message()), HasSubstr("skills() returned a 2-d tensor"));
+  std::vector<float> obs = RandomObs(1), actions(69), z(1000);
+  EXPECT_TRUE((*checkpoint)->Act(obs.data(), 1, actions.data()).ok());
+  EXPECT_EQ((*checkpoint)->Skills(obs.data(), 1, z.data()).code(), absl::StatusCode::kFailedPrecondition);
+}
+
 TEST(SkillCompositionTest, InterpolationGoesFromZeroToOne) {
   EXPECT_EQ(InterpolationAlpha(0, 31), 0.0);
   EXPECT_EQ(InterpolationAlpha(15, 31), 0.5);

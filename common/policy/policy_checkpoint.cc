@@ -92,8 +92,15 @@ absl::StatusOr<std::unique_ptr<PolicyCheckpoint>> PolicyCheckpoint::LoadBytes(ab
   auto spec = PolicySpec::FromJson(extra[kCheckpointSpecFile]);
   if (!spec.ok()) return absl::InvalidArgumentError(absl::StrCat("checkpoint: ", spec.status().message()));
   checkpoint->spec_ = *std::move(spec);
-  if (absl::Status probed = checkpoint->ProbeSkills(); !probed.ok()) return probed;
+  // A skills() that does not work costs composition only, not plain rollouts: kept as the reason.
+  checkpoint->skills_error_ = checkpoint->ProbeSkills();
+  if (!checkpoint->skills_error_.ok()) checkpoint->skill_parts_ = 0;
   return checkpoint;
+}
+
+absl::Status PolicyCheckpoint::NoSkills() const {
+  if (!skills_error_.ok()) return absl::FailedPreconditionError(skills_error_.message());
+  return absl::FailedPreconditionError("checkpoint: no skills() and act_with_z() methods");
 }
 
 absl::Status PolicyCheckpoint::ProbeSkills() {
@@ -128,7 +135,7 @@ absl::Status PolicyCheckpoint::CopyOut(const char* method, const at::Tensor& out
 }
 
 absl::Status PolicyCheckpoint::Skills(const float* obs, int n, float* z) {
-  if (!has_skills()) return absl::FailedPreconditionError("checkpoint: no skills() method (see has_skills)");
+  if (!has_skills()) return NoSkills();
   std::lock_guard<std::mutex> lock(mutex_);
   try {
     torch::NoGradGuard no_grad;
@@ -142,7 +149,7 @@ absl::Status PolicyCheckpoint::Skills(const float* obs, int n, float* z) {
 }
 
 absl::Status PolicyCheckpoint::ActWithZ(const float* obs, const float* z, int n, float* actions) {
-  if (!has_skills()) return absl::FailedPreconditionError("checkpoint: no act_with_z() method (see has_skills)");
+  if (!has_skills()) return NoSkills();
   std::lock_guard<std::mutex> lock(mutex_);
   try {
     torch::NoGradGuard no_grad;

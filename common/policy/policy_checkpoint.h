@@ -48,8 +48,10 @@ class PolicyCheckpoint {
 
   // Skill composition. A ModSkill policy exported since issue 13 (learner/policy_export.h) also
   // defines skills(obs) -> z [n, P, E] and act_with_z(obs, z) -> actions; older archives and
-  // affine policies do not (has_skills() false, and the two calls FAILED_PRECONDITION).
+  // affine policies do not (has_skills() false, and the two calls FAILED_PRECONDITION); nor does
+  // one whose skills() fails on a zero observation (skills_error() says why; forward still runs).
   bool has_skills() const { return skill_parts_ > 0; }
+  const absl::Status& skills_error() const { return skills_error_; }
   int skill_parts() const { return skill_parts_; }
   int embed_dim() const { return embed_dim_; }
   // Per-part controllers (not the whole-body ablation's one controller, whose input mixes every
@@ -64,10 +66,12 @@ class PolicyCheckpoint {
   PolicyCheckpoint() = default;
   // Finds skills()' output shape by running it on one zero observation (no methods: stays 0).
   absl::Status ProbeSkills();
+  absl::Status NoSkills() const;
   absl::Status CopyOut(const char* method, const at::Tensor& output, int n, int64_t row_size, float* out);
   std::unique_ptr<torch::jit::Module> module_;
   PolicySpec spec_;
   int skill_parts_ = 0, embed_dim_ = 0;
+  absl::Status skills_error_;
   bool part_controllers_ = false;
   std::mutex mutex_;
 };

@@ -15,6 +15,9 @@ absl::Status CheckSkillRequest(const v1::RolloutRequest& request, const PolicyCh
                                TaskKind task) {
   if (!WantsSkills(request)) return absl::OkStatus();
   const char* field = request.has_composition() ? "composition" : "record_skills";
+  if (!checkpoint.skills_error().ok()) {
+    return absl::FailedPreconditionError(absl::StrCat(field, ": ", checkpoint.skills_error().message()));
+  }
   if (!checkpoint.has_skills()) {
     return absl::FailedPreconditionError(absl::StrCat(
         field, ": the checkpoint defines no skills() and act_with_z() (an affine policy, or a ModSkill policy "
