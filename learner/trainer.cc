@@ -102,6 +102,7 @@ ServerPoolOptions Trainer::PoolOptions() const {
   pool.session.set_termination_distance(static_cast<float>(curriculum_.distance()));
   pool.session.set_termination_bodies(ToWire(TerminationBodiesOf(config)));
   pool.session.set_amp_obs(v1::FULL);
+  pool.session.set_loop_clips(config.loop_clips);
   if (!IsTrackingTask(config.task)) {
     pool.session.set_task(config.task);
     v1::TaskSettings* settings = pool.session.mutable_task_settings();

@@ -22,6 +22,9 @@ absl::Status ValidateTask(const TrainerConfig& c) {
                                : absl::StrCat("--skills: required with --task ", c.task,
                                               " (a tracker's policy.pt trained with --controller_input proprioception)"));
   }
+  if (!IsTrackingTask(c.task) && c.loop_clips) {
+    return absl::InvalidArgumentError(absl::StrCat("--loop_clips: tracking only, not with --task ", c.task));
+  }
   if (!IsTrackingTask(c.task) && c.model.whole_body) {
     return absl::InvalidArgumentError("--whole_body: not with a --task (the skills are per-part controllers)");
   }
@@ -186,6 +189,7 @@ std::string TrainerConfig::ToJson() const {
   json["collect_during_update"] = collect_during_update;
   json["termination_curriculum"] = {curriculum_start, curriculum_end};
   json["task"] = task;
+  json["loop_clips"] = loop_clips;
   if (!IsTrackingTask(task)) {
     json["skills"] = skills;
     json["task_hidden"] = model.task_hidden;

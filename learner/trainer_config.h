@@ -54,6 +54,9 @@ struct TrainerConfig {
   // --controller_input proprioception). The task session then runs the tracker's action mapping.
   std::string task = "tracking";
   std::string skills;
+  // Tracking: clips loop (SessionConfig.loop_clips), so that episodes run 300 steps through the
+  // clip's seams, as a task's looping base motion later asks of the skills.
+  bool loop_clips = false;
   // SessionConfig.task_settings; 0 in a field: the server's default.
   double task_min_speed = 0, task_max_speed = 0, task_min_goal_interval_s = 0, task_max_goal_interval_s = 0;
 

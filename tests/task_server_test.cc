@@ -105,6 +105,10 @@ TEST_F(SimulationServerTest, BadTasksAreRejectedNamingTheField) {
   config.set_task("reach");
   config.mutable_task_settings()->set_max_goal_interval_s(std::nanf(""));
   cases.push_back({config, "task_settings.max_goal_interval_s"});
+  config = Config(2);
+  config.set_task("steer");
+  config.set_loop_clips(true);
+  cases.push_back({config, "loop_clips: tracking only"});
   for (const Case& c : cases) {
     auto stream = client_->OpenSession(c.config);
     ASSERT_FALSE(stream.ok()) << c.message;

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include "server/core/env/base_motion_anchor.h"
 #include "server/core/env/observation.h"
 #include "tests/test_fixtures.h"
 
@@ -180,6 +181,47 @@ TEST(TrackingEnvTest, ClipEndTruncatesAndResets) {
   EXPECT_EQ(batch->buffers().done[0], 1);
   EXPECT_EQ(batch->buffers().truncated[0], 1);
   EXPECT_EQ(batch->buffers().ended_frame[0], frames - 1);
+}
+
+// SessionConfig.loop_clips: the clip's end does not end the episode; the reference goes on at
+// frame 1 from where the last frame left it (not back at the clip's start), until the step limit.
+TEST(TrackingEnvTest, LoopingClipGoesOnFromItsLastFrameUntilTheStepLimit) {
+  EnvBatchConfig config = SmallConfig(1);
+  config.env.termination = TerminationMode::kNone;
+  config.env.loop_clips = true;
+  config.env.max_episode_steps = 8;
+  auto batch = MakeBatch(config);
+  const int clip = batch->motions().Find("deepmimic_walk");
+  const MotionClip& walk = batch->motions().clip(clip);
+  const int frames = walk.num_frames;
+  ASSERT_GT((walk.root_pos[frames - 1] - walk.root_pos[0]).head<2>().norm(), 0.5) << "a clip that travels";
+  batch->env(0).ResetTo(clip, frames - 4, batch->row(0));
+  const int root_dpos = batch->spec().body_obs_start[0] + kSelfFeaturesRoot;
+  std::vector<int> frames_reached;
+  for (int s = 0; s < 7; ++s) {
+    ASSERT_TRUE(batch->Step(ReferenceActions(*batch)).ok());
+    ASSERT_EQ(batch->buffers().done[0], 0) << s;
+    frames_reached.push_back(batch->buffers().frame[0]);
+    const float* dpos = &batch->buffers().obs[root_dpos];
+    EXPECT_LT(std::hypot(dpos[0], dpos[1]), 0.3) << "step " << s << ": the next reference root is near the character";
+  }
+  EXPECT_EQ(frames_reached, (std::vector<int>{frames - 3, frames - 2, frames - 1, 1, 2, 3, 4}));
+  ASSERT_TRUE(batch->Step(ReferenceActions(*batch)).ok());
+  EXPECT_EQ(batch->buffers().done[0], 1);
+  EXPECT_EQ(batch->buffers().truncated[0], 1) << "ended by the step limit";
+}
+
+TEST(BaseMotionAnchorTest, PlanarMotionsComposeAndACycleMovesTheFirstFrameOntoTheLast) {
+  const MotionClip& walk = DefaultMotions()->clip(DefaultMotions()->Find("deepmimic_walk"));
+  const PlanarMotion cycle = ClipCycleMotion(walk);
+  const int last = walk.num_frames - 1;
+  const Vec3 first = walk.root_pos[0];
+  const Vec3 moved = cycle.yaw * first + cycle.shift;
+  EXPECT_NEAR(moved.x(), walk.root_pos[last].x(), 1e-9);
+  EXPECT_NEAR(moved.y(), walk.root_pos[last].y(), 1e-9);
+  const PlanarMotion twice = cycle.After(cycle);
+  const Vec3 p(0.3, -1.2, 0.9);
+  EXPECT_LT(((twice.yaw * p + twice.shift) - (cycle.yaw * (cycle.yaw * p + cycle.shift) + cycle.shift)).norm(), 1e-12);
 }
 
 TEST(TrackingEnvTest, EnergyPenaltyIsOffRightAfterResetThenNegative) {

@@ -62,6 +62,9 @@ ABSL_FLAG(std::string, task, "tracking",
           "that drives the frozen part controllers of --skills");
 ABSL_FLAG(std::string, skills, "",
           "--task: a tracker's exported policy.pt, trained with --controller_input proprioception");
+ABSL_FLAG(bool, loop_clips, false,
+          "tracking: clips loop (on at frame 1, carried by their own displacement) and episodes run 300 steps, so "
+          "the skills learn to go on as a task's looping base motion asks");
 ABSL_FLAG(double, task_log_std, -2.9, "--task: fixed log standard deviation of the task policy in z space");
 ABSL_FLAG(bool, task_skill_prior, true,
           "--task steer|reach|strike: z = normalize(z_prior + task head), z_prior from the tracker's frozen attention on "
@@ -293,6 +296,7 @@ absl::Status TaskFromFlags(TrainerConfig* config) {
   config->skills = absl::GetFlag(FLAGS_skills);
   config->model.task_log_std = absl::GetFlag(FLAGS_task_log_std);
   config->model.task_skill_prior = absl::GetFlag(FLAGS_task_skill_prior);
+  config->loop_clips = absl::GetFlag(FLAGS_loop_clips);
   if (const std::vector<std::string> hidden = absl::GetFlag(FLAGS_task_hidden); !hidden.empty()) {
     config->model.task_hidden.clear();
     for (const std::string& size : hidden) {

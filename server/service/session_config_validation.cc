@@ -84,6 +84,10 @@ absl::StatusOr<SessionSettings> ParseSessionConfig(const v1::SessionConfig& conf
   if (!task.ok()) return task.status();
   auto task_settings = ToTaskSettings(config.task_settings());
   if (!task_settings.ok()) return task_settings.status();
+  if (config.loop_clips() && *task != TaskKind::kTracking) {
+    return absl::InvalidArgumentError(absl::StrCat("loop_clips: tracking only; task ", TaskInfoOf(*task).name,
+                                                   " has its own episode ends"));
+  }
   settings.amp_frames = config.amp_obs() == v1::NEWEST ? 1 : config.amp_obs() == v1::OMIT ? 0 : kAmpHistory;
   if (config.motions_size() > max_library_clips) {
     return absl::InvalidArgumentError(absl::StrCat("motions: ", config.motions_size(),
@@ -101,6 +105,7 @@ absl::StatusOr<SessionSettings> ParseSessionConfig(const v1::SessionConfig& conf
   settings.env.max_episode_steps = config.max_episode_steps();
   settings.env.task = *task;
   settings.env.task_settings = *task_settings;
+  settings.env.loop_clips = config.loop_clips();
   return settings;
 }
 

@@ -4,17 +4,38 @@
 
 namespace modskill {
 
-void AnchorToCharacter(const HumanoidState& anchor, const HumanoidState& sim, HumanoidState* target) {
-  const Quat yaw = HeadingRotation(sim.body_rot[0]) * InverseHeadingRotation(anchor.body_rot[0]);
-  const Vec3 from(anchor.body_pos[0].x(), anchor.body_pos[0].y(), 0.0);
-  const Vec3 to(sim.body_pos[0].x(), sim.body_pos[0].y(), 0.0);
-  const size_t bodies = target->body_pos.size();
+PlanarMotion PlanarMotion::Between(const Vec3& from_pos, const Quat& from_rot, const Vec3& to_pos,
+                                   const Quat& to_rot) {
+  PlanarMotion motion;
+  motion.yaw = HeadingRotation(to_rot) * InverseHeadingRotation(from_rot);
+  motion.shift = Vec3(to_pos.x(), to_pos.y(), 0.0) - motion.yaw * Vec3(from_pos.x(), from_pos.y(), 0.0);
+  return motion;
+}
+
+PlanarMotion PlanarMotion::After(const PlanarMotion& first) const {
+  PlanarMotion both;
+  both.yaw = yaw * first.yaw;
+  both.shift = yaw * first.shift + shift;
+  return both;
+}
+
+void PlanarMotion::Apply(HumanoidState* state) const {
+  const size_t bodies = state->body_pos.size();
   for (size_t b = 0; b < bodies; ++b) {
-    target->body_pos[b] = yaw * (target->body_pos[b] - from) + to;
-    target->body_rot[b] = yaw * target->body_rot[b];
-    target->body_vel[b] = yaw * target->body_vel[b];
-    target->body_ang_vel[b] = yaw * target->body_ang_vel[b];
+    state->body_pos[b] = yaw * state->body_pos[b] + shift;
+    state->body_rot[b] = yaw * state->body_rot[b];
+    state->body_vel[b] = yaw * state->body_vel[b];
+    state->body_ang_vel[b] = yaw * state->body_ang_vel[b];
   }
+}
+
+void AnchorToCharacter(const HumanoidState& anchor, const HumanoidState& sim, HumanoidState* target) {
+  PlanarMotion::Between(anchor.body_pos[0], anchor.body_rot[0], sim.body_pos[0], sim.body_rot[0]).Apply(target);
+}
+
+PlanarMotion ClipCycleMotion(const MotionClip& clip) {
+  const int last = clip.num_frames - 1;
+  return PlanarMotion::Between(clip.root_pos[0], clip.local(0, 0), clip.root_pos[last], clip.local(last, 0));
 }
 
 }  // namespace modskill

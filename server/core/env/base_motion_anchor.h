@@ -13,10 +13,26 @@
 
 namespace modskill {
 
-// Moves `target` (every body's position, rotation, velocity and angular velocity) by the yaw
-// rotation and horizontal shift that map `anchor`'s root onto `sim`'s root (x, y and heading;
-// heights and tilts are left as the clip has them).
+// A yaw rotation about the vertical and a horizontal shift: p -> yaw * p + shift.
+struct PlanarMotion {
+  Quat yaw = Quat::Identity();
+  Vec3 shift = Vec3::Zero();  // z = 0
+
+  // The motion that puts root (from_pos, from_rot) on root (to_pos, to_rot) in x, y and heading.
+  static PlanarMotion Between(const Vec3& from_pos, const Quat& from_rot, const Vec3& to_pos, const Quat& to_rot);
+  // This motion after `first`: p -> this(first(p)).
+  PlanarMotion After(const PlanarMotion& first) const;
+  // Moves every body's position, rotation, velocity and angular velocity of `state`.
+  void Apply(HumanoidState* state) const;
+};
+
+// Moves `target` by the planar motion that maps `anchor`'s root onto `sim`'s root (x, y and
+// heading; heights and tilts are left as the clip has them).
 void AnchorToCharacter(const HumanoidState& anchor, const HumanoidState& sim, HumanoidState* target);
+
+// A looping clip's displacement per cycle: the planar motion from its first frame's root to its
+// last frame's (SessionConfig.loop_clips).
+PlanarMotion ClipCycleMotion(const MotionClip& clip);
 
 }  // namespace modskill
 

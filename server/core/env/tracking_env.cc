@@ -42,6 +42,11 @@ void TrackingEnv::ResetTo(int clip, int frame, EnvRow row) {
   clip_ = context_->clip_ids.empty() ? clip : context_->clip_ids[clip];
   frame_ = std::clamp(frame, 0, motion.num_frames - 2);
   episode_steps_ = 0;
+  loop_motion_ = PlanarMotion();
+  if (LoopsClip()) {
+    cycle_motion_ = ClipCycleMotion(motion);
+    next_loop_motion_ = loop_motion_.After(cycle_motion_);
+  }
   finished_ = false;
   SetSimulationToReference(*context_->humanoid, motion, frame_, data_);
   if (goal_task_ != nullptr) {
@@ -72,6 +77,7 @@ bool TrackingEnv::PhysicsDiverged() const {
 TrackingErrors TrackingEnv::CurrentTrackingTerms(float* terms) {
   ReadSimulatedState(*context_->humanoid, data_, &sim_);
   ReadReferenceState(*motion_, frame_, &reference_);
+  if (LoopsClip()) loop_motion_.Apply(&reference_);
   return ComputeImitationTerms(context_->config.reward, sim_, reference_, terms, body_distance_.data());
 }
 
@@ -79,8 +85,12 @@ int TrackingEnv::NextFrame() const {
   const int last = motion_->num_frames - 1;
   // A goal task's base motion loops. It goes on at frame 1: the step from frame 0 to 1 is one the
   // clip has, so the anchored reference (WriteObservation) moves as the clip does across the seam.
-  if (goal_task_ != nullptr) return frame_ >= last ? std::min(1, last) : frame_ + 1;
+  if (goal_task_ != nullptr || LoopsClip()) return frame_ >= last ? std::min(1, last) : frame_ + 1;
   return std::min(frame_ + 1, last);
+}
+
+const PlanarMotion& TrackingEnv::LoopMotionOf(int frame) const {
+  return frame < frame_ ? next_loop_motion_ : loop_motion_;
 }
 
 void TrackingEnv::Step(const float* action, EnvRow row) {
@@ -97,7 +107,11 @@ void TrackingEnv::Step(const float* action, EnvRow row) {
                        &motion.dof_pos[static_cast<size_t>(next_frame) * motion.num_hinges()], pd_targets_.data());
   const double power = pd_.Step(pd_targets_.data(), data_);
   ++episode_steps_;
-  frame_ = goal_task_ != nullptr ? next_frame : frame_ + 1;
+  if (LoopsClip() && next_frame < frame_) {
+    loop_motion_ = next_loop_motion_;
+    next_loop_motion_ = loop_motion_.After(cycle_motion_);
+  }
+  frame_ = goal_task_ != nullptr || LoopsClip() ? next_frame : frame_ + 1;
   if (PhysicsDiverged()) {
     EndOnBlowUp(row);
     return;
@@ -113,10 +127,10 @@ void TrackingEnv::Step(const float* action, EnvRow row) {
   }
   const TrackingErrors errors = ScoreTracking(terms, row);
   AddEnergyAndSum(power, terms, row);
-  FinishStep(Terminated(errors),
-             frame_ >= motion.num_frames - 1 ||
-                 (config.max_episode_steps > 0 && episode_steps_ >= config.max_episode_steps),
-             row);
+  const bool at_end = LoopsClip() ? episode_steps_ >= TaskEpisodeSteps(config.max_episode_steps)
+                                  : frame_ >= motion.num_frames - 1 ||
+                                        (config.max_episode_steps > 0 && episode_steps_ >= config.max_episode_steps);
+  FinishStep(Terminated(errors), at_end, row);
 }
 
 void TrackingEnv::EndOnBlowUp(EnvRow row) {
@@ -253,7 +267,9 @@ void TrackingEnv::WriteObservation(EnvRow row) {
     WriteTrackingObservation(spec, sim_, target_, obs);
     goal_task_->WriteGoal(sim_, data_, obs + spec.goal_obs.start);
   } else {
-    ReadReferenceState(motion, std::min(frame_ + 1, motion.num_frames - 1), &target_);
+    const int next_frame = NextFrame();
+    ReadReferenceState(motion, next_frame, &target_);
+    if (LoopsClip()) LoopMotionOf(next_frame).Apply(&target_);
     if (spec.task == TaskKind::kVrTracking) {
       WriteSelfObservation(spec, sim_, obs);
       for (size_t k = 0; k < context_->vr_body_ids.size(); ++k) {

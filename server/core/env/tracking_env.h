@@ -19,6 +19,7 @@
 #include "absl/strings/string_view.h"
 #include "common/policy/termination.h"
 #include "server/core/curriculum/clip_sampler.h"
+#include "server/core/env/base_motion_anchor.h"
 #include "server/core/env/action_mapping.h"
 #include "server/core/env/batch_buffers.h"
 #include "server/core/env/env_spec.h"
@@ -49,6 +50,8 @@ struct TrackingEnvConfig {
   TaskKind task = TaskKind::kTracking;
   TaskSettings task_settings;
   bool random_start_frame = true;
+  // Tracking: the clip loops (SessionConfig.loop_clips); episodes end at TaskEpisodeSteps.
+  bool loop_clips = false;
   // false: an ended episode keeps its final state and later steps do nothing until the next
   // reset (rollouts and evaluation).
   bool auto_reset = true;
@@ -119,8 +122,12 @@ class TrackingEnv {
   // Books the episode's end if `terminated` or the step limit (or the clip's end) is reached;
   // otherwise pushes the AMP frame and writes the next observation.
   void FinishStep(bool terminated, bool at_end, EnvRow row);
-  // The reference frame the next step reaches: tracking stops at the clip's end, goal tasks loop.
+  // The reference frame the next step reaches: tracking stops at the clip's end, goal tasks and
+  // looping clips go on at frame 1.
   int NextFrame() const;
+  bool LoopsClip() const { return context_->config.loop_clips && goal_task_ == nullptr; }
+  // Where the reference of `frame`, the next frame or the current one, lies in this loop.
+  const PlanarMotion& LoopMotionOf(int frame) const;
   // Errors over the VR bodies only (VR tracking's success and errors).
   TrackingErrors VrErrors() const;
   // Mean body distance per part of the layout between sim_ and reference_ (one float per part).
@@ -138,6 +145,9 @@ class TrackingEnv {
   // joining or leaving) without disturbing an episode in progress.
   std::shared_ptr<const MotionClip> motion_;
   int clip_ = 0;
+  // A looping clip: where the current cycle's reference lies (the clip's own displacement, once per
+  // cycle), and the next cycle's.
+  PlanarMotion loop_motion_, next_loop_motion_, cycle_motion_;
   int frame_ = 0;
   int episode_steps_ = 0;
   bool finished_ = false;
