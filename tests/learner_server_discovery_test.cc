@@ -13,6 +13,7 @@
 #include "learner/server_discovery.h"
 #include "learner/trainer.h"
 #include "tests/server_fixture.h"
+#include "tests/trainer_test_config.h"
 
 namespace modskill::learner {
 namespace {
@@ -27,21 +28,15 @@ std::string TestDir(const std::string& name) {
   return dir;
 }
 
+// The learner tests' config, cut to one short iteration: these tests watch membership, not learning.
 TrainerConfig TinyConfig(const std::vector<std::string>& servers, const std::string& run_dir) {
-  TrainerConfig config = *TrainerConfig::ForPreset("small");
-  config.servers = servers;
-  config.envs_per_server = 16;
-  config.sessions_per_server = 2;
+  TrainerConfig config = SmallTestTrainerConfig(servers, run_dir);
   config.horizon = 4;
   config.epochs = 1;
   config.minibatch_size = 32;
   config.amp_samples = 32;
-  config.discriminator_epochs = 1;
   config.iterations = 1;
-  config.run_dir = run_dir;
   config.checkpoint_every = 100;
-  config.server_timeout_s = 20;
-  config.update_threads = 1;
   return config;
 }
 

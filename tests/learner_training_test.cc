@@ -17,6 +17,7 @@
 #include "learner/task_evaluation.h"
 #include "learner/trainer.h"
 #include "tests/server_fixture.h"
+#include "tests/trainer_test_config.h"
 
 namespace modskill::learner {
 namespace {
@@ -30,22 +31,9 @@ std::string RunDir(const std::string& name) {
 }
 
 TrainerConfig SmallConfig(const std::vector<int>& ports, const std::string& run_dir) {
-  TrainerConfig config = *TrainerConfig::ForPreset("small");
-  for (int port : ports) config.servers.push_back(absl::StrCat("127.0.0.1:", port));
-  config.envs_per_server = 16;
-  config.sessions_per_server = 2;
-  config.horizon = 8;
-  config.epochs = 2;
-  config.minibatch_size = 64;
-  config.amp_samples = 64;
-  config.discriminator_epochs = 1;
-  config.iterations = 2;
-  config.run_dir = run_dir;
-  config.checkpoint_every = 1;
-  config.server_timeout_s = 20;
-  // ctest runs other tests beside these: two OpenMP threads each would spin against them.
-  config.update_threads = 1;
-  return config;
+  std::vector<std::string> servers;
+  for (int port : ports) servers.push_back(absl::StrCat("127.0.0.1:", port));
+  return SmallTestTrainerConfig(servers, run_dir);
 }
 
 // Twelve short iterations on deepmimic_walk with the paper's mapping, where every env starts out
