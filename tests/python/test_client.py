@@ -138,6 +138,23 @@ class ClientTest(unittest.TestCase):
         self.assertEqual(caught.exception.code, grpc.StatusCode.INVALID_ARGUMENT)
         self.assertIn("sterr", caught.exception.message)
 
+    def test_looping_clip_runs_past_its_end(self):
+        frames = 38  # deepmimic_walk
+        with self.client.session(1, seed=2, motions=["deepmimic_walk"], termination="none", action_mode="residual",
+                                 loop_clips=True, max_episode_steps=60) as session:
+            seen = []
+            for _ in range(59):
+                result = session.step(np.zeros((1, session.spec.action_size), np.float32))
+                self.assertFalse(result.done[0])
+                seen.append(int(result.frame[0]))
+            self.assertGreater(len(seen), frames, "ran past the clip's end")
+            self.assertNotIn(0, seen[seen.index(frames - 1):], "looped on at frame 1")
+            self.assertTrue(session.step(np.zeros((1, session.spec.action_size), np.float32)).done[0])
+        with self.assertRaises(modskill.ServerError) as caught:
+            self.client.session(1, task="steer", loop_clips=True)
+        self.assertEqual(caught.exception.code, grpc.StatusCode.INVALID_ARGUMENT)
+        self.assertIn("loop_clips", caught.exception.message)
+
     def test_describe_other_layout_and_unknown_layout(self):
         spec = self.client.describe("3part")
         self.assertEqual(spec.part_layout, "3part")

@@ -343,7 +343,7 @@ class Client:
                 termination_distance: float = 0.0, max_episode_steps: int = 0,
                 action_mode: Union[str, int] = "absolute", residual_scale: float = 0.0,
                 termination_bodies: Union[str, int] = "all", task: str = "",
-                task_settings: Optional[Mapping[str, float]] = None) -> "Session":
+                task_settings: Optional[Mapping[str, float]] = None, loop_clips: bool = False) -> "Session":
         """Opens a simulation session of ``num_envs`` envs and returns it once the server has
         reset them (``Session.initial`` holds the first observations).
 
@@ -362,9 +362,11 @@ class Client:
           residual_scale: residual mode only; 0: the server's default (0.5).
           termination_bodies: "all" or "no_feet" (training termination ignores ankles and toes).
           task: "" or "tracking", or a task env ``describe().tasks`` lists ("steer", "reach",
-            "strike", "vr_tracking"): observations are the self features then the goal.
+            "strike", "vr_tracking"): the goal ends each observation (``spec.goal_obs``).
           task_settings: e.g. {"min_speed": 1.0, "max_speed": 2.0, "min_goal_interval_s": 2,
             "max_goal_interval_s": 5}; a missing key keeps the server's default.
+          loop_clips: tracking only: a clip's end does not end the episode; the reference goes on
+            at frame 1, moved by the clip's own displacement, until max_episode_steps (0: 300).
 
         Use it as a context manager (or call ``close()``) so that the server frees the envs.
         """
@@ -379,7 +381,8 @@ class Client:
                                   residual_scale=residual_scale,
                                   termination_bodies=_enum(termination_bodies, _TERMINATION_BODIES,
                                                            "termination_bodies"),
-                                  task=task, task_settings=pb.TaskSettings(**dict(task_settings or {})))
+                                  task=task, task_settings=pb.TaskSettings(**dict(task_settings or {})),
+                                  loop_clips=bool(loop_clips))
         session = Session(self, config)
         self._sessions.add(session)
         return session
