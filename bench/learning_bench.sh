@@ -36,34 +36,10 @@ done
 [ -n "$OUT" ] || { echo "error: --out DIR is required" >&2; exit 2; }
 ((${#VARIANTS[@]})) || { echo "error: give at least one NAME=\"learner flags\" variant" >&2; exit 2; }
 mkdir -p "$OUT"
-free_port() { /usr/bin/python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])'; }
-
-# Side by side, each learner updates on one thread: two learners with two OpenMP threads each on
-# two cores spin against each other (measured: 8 s updates instead of 1.2 s).
-SHARED=""
-((${#VARIANTS[@]} > 1)) && SHARED="--update_threads 1"
-PIDS=() NAMES=() PORTS=() SERVERS=()
-cleanup() { for pid in "${SERVERS[@]}"; do kill -TERM "$pid" 2>/dev/null || true; done; }
-trap cleanup EXIT
-for variant in "${VARIANTS[@]}"; do
-  name="${variant%%=*}" flags="${variant#*=}"
-  port=$(free_port)
-  # shellcheck disable=SC2086
-  "$BUILD/server/modskill-server" --port "$port" --threads 1 $SERVER_FLAGS > "$OUT/$name.server.log" 2>&1 &
-  SERVERS+=($!)
-  NAMES+=("$name") PORTS+=("$port")
-  # shellcheck disable=SC2086  # the variant's flags are words on purpose
-  "$BUILD/learner/modskill-learner" --servers "127.0.0.1:$port" --run_dir "$OUT/$name" --preset small \
-      --iterations "$ITERATIONS" --time_budget_min "$MINUTES" --seed 1 --checkpoint_every 20 \
-      ${MOTIONS:+--motions "$MOTIONS"} ${MILESTONES:+--milestones "$MILESTONES"} $RESUME $SHARED $flags \
-      > "$OUT/$name.train.log" 2>&1 &
-  PIDS+=($!)
-done
-status=0
-for i in "${!PIDS[@]}"; do
-  wait "${PIDS[$i]}" || { echo "error: variant ${NAMES[$i]} failed; see $OUT/${NAMES[$i]}.train.log" >&2; status=1; }
-done
-((status == 0)) || exit 1
+source bench/side_by_side.sh
+# shellcheck disable=SC2086  # the optional flags are words on purpose
+train_side_by_side "$SERVER_FLAGS" --iterations "$ITERATIONS" --time_budget_min "$MINUTES" \
+    ${MOTIONS:+--motions "$MOTIONS"} ${MILESTONES:+--milestones "$MILESTONES"} $RESUME || exit 1
 
 # Evaluation, one variant after the other (the servers are idle now), and the baseline once.
 CLIPS=()

@@ -33,30 +33,9 @@ done
 [ -f "$SKILLS" ] || { echo "error: --skills: no file '$SKILLS' (a tracker's policy.pt, --controller_input proprioception)" >&2; exit 2; }
 ((${#VARIANTS[@]})) || { echo "error: give at least one NAME=\"--task T ...\" variant" >&2; exit 2; }
 mkdir -p "$OUT"
-free_port() { /usr/bin/python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])'; }
-
-SHARED=""
-((${#VARIANTS[@]} > 1)) && SHARED="--update_threads 1"
-PIDS=() NAMES=() PORTS=() SERVERS=() FLAGS=()
-cleanup() { for pid in "${SERVERS[@]}"; do kill -TERM "$pid" 2>/dev/null || true; done; }
-trap cleanup EXIT
-for variant in "${VARIANTS[@]}"; do
-  name="${variant%%=*}" flags="${variant#*=}"
-  port=$(free_port)
-  "$BUILD/server/modskill-server" --port "$port" --threads 1 --no_generative > "$OUT/$name.server.log" 2>&1 &
-  SERVERS+=($!)
-  NAMES+=("$name") PORTS+=("$port") FLAGS+=("$flags")
-  # shellcheck disable=SC2086  # the variant's flags are words on purpose
-  "$BUILD/learner/modskill-learner" --servers "127.0.0.1:$port" --run_dir "$OUT/$name" --preset small \
-      --skills "$SKILLS" --iterations 1000000 --time_budget_min "$MINUTES" --seed 1 --checkpoint_every 20 \
-      ${MOTIONS:+--motions "$MOTIONS"} $RESUME $SHARED $flags > "$OUT/$name.train.log" 2>&1 &
-  PIDS+=($!)
-done
-status=0
-for i in "${!PIDS[@]}"; do
-  wait "${PIDS[$i]}" || { echo "error: variant ${NAMES[$i]} failed; see $OUT/${NAMES[$i]}.train.log" >&2; status=1; }
-done
-((status == 0)) || exit 1
+source bench/side_by_side.sh
+train_side_by_side "--no_generative" --skills "$SKILLS" --iterations 1000000 --time_budget_min "$MINUTES" \
+    ${MOTIONS:+--motions "$MOTIONS"} $RESUME || exit 1
 
 # Evaluation: the task policy, random z and constant z over the same frozen skills, one variant
 # after the other (the servers are idle now).
