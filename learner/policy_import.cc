@@ -83,6 +83,25 @@ absl::Status CopyIntoMlp(const std::vector<LinearWeights>& layers, MlpImpl& mlp,
   return absl::OkStatus();
 }
 
+absl::Status CopyAttentionFrom(const ExportedPolicy& exported, SkillAttentionImpl& attention) {
+  std::vector<std::pair<std::string, Mlp>> maps;  // Mlp handles (copies) can be written through
+  for (size_t p = 0; p < attention.values().size(); ++p) {
+    maps.emplace_back(absl::StrCat("part", p, "_value"), attention.values()[p]);
+    if (!attention.uses_attention()) continue;
+    maps.emplace_back(absl::StrCat("part", p, "_key"), attention.keys()[p]);
+    maps.emplace_back(absl::StrCat("part", p, "_query"), attention.queries()[p]);
+  }
+  for (auto& [prefix, mlp] : maps) {
+    auto layers = exported.Mlp(prefix);
+    if (!layers.ok()) return layers.status();
+    if (layers->empty()) return absl::InvalidArgumentError(absl::StrCat(exported.path, ": no ", prefix, " weights"));
+    if (absl::Status status = CopyIntoMlp(*layers, *mlp, absl::StrCat(exported.path, ": ", prefix)); !status.ok()) {
+      return status;
+    }
+  }
+  return absl::OkStatus();
+}
+
 namespace {
 
 // The sizes of the exported networks as a ModelConfig.
@@ -141,16 +160,11 @@ absl::StatusOr<RebuiltPolicy> RebuildTracker(const ExportedPolicy& exported, con
     if (!layers.ok()) return layers.status();
     return CopyIntoMlp(*layers, *mlp, absl::StrCat(exported.path, ": ", prefix));
   };
-  const SkillAttentionImpl& attention = *rebuilt.policy->attention();
-  for (size_t p = 0; p < layout.parts.size(); ++p) {
-    const std::string part = absl::StrCat("part", p, "_");
-    if (absl::Status s = copy(part + "value", attention.values()[p]); !s.ok()) return s;
-    if (config->attention) {
-      if (absl::Status s = copy(part + "key", attention.keys()[p]); !s.ok()) return s;
-      if (absl::Status s = copy(part + "query", attention.queries()[p]); !s.ok()) return s;
-    }
-    if (!config->whole_body) {
-      if (absl::Status s = copy(part + "controller", rebuilt.policy->controllers()[p]->mlp()); !s.ok()) return s;
+  SkillAttention attention = rebuilt.policy->attention();
+  if (absl::Status s = CopyAttentionFrom(exported, *attention); !s.ok()) return s;
+  for (size_t p = 0; p < layout.parts.size() && !config->whole_body; ++p) {
+    if (absl::Status s = copy(absl::StrCat("part", p, "_controller"), rebuilt.policy->controllers()[p]->mlp()); !s.ok()) {
+      return s;
     }
   }
   if (config->whole_body) {

@@ -18,6 +18,7 @@
 #include "learner/model_config.h"
 #include "learner/modskill_policy.h"
 #include "learner/part_controller.h"
+#include "learner/skill_attention.h"
 #include "learner/running_mean_std.h"
 
 namespace modskill::learner {
@@ -52,6 +53,11 @@ absl::Status CopyIntoMlp(const std::vector<LinearWeights>& layers, MlpImpl& mlp,
 // today's script (skills() and act_with_z(), policy_export.h): the ModSkillPolicy (sizes,
 // attention or not, per-part or whole-body controllers and their input read from the tensors and
 // the spec) and its observation normalizer.
+// Copies the exported skill attention (part<p>_value, and part<p>_key / part<p>_query where
+// `attention` uses attention) into `attention`, without gradient; INVALID_ARGUMENT naming the file
+// and map when one is missing or does not fit.
+absl::Status CopyAttentionFrom(const ExportedPolicy& exported, SkillAttentionImpl& attention);
+
 struct RebuiltPolicy {
   ModSkillPolicy policy{nullptr};
   RunningMeanStd obs_norm{nullptr};

@@ -58,15 +58,13 @@ absl::StatusOr<SkillLibrary> SkillLibrary::Load(const std::string& path) {
   if (value->empty()) return invalid("not a ModSkill tracker (no part0_value weights: no skill embedding)");
   library.embed_dim_ = value->back().weight.size(0);
   library.attention_hidden_ = HiddenSizes(*value);
-  const bool attention = library.policy_.Has("part0_key_fc0_weight");
+  library.has_attention_ = library.policy_.Has("part0_key_fc0_weight");
   for (size_t p = 0; p < library.controllers_.size(); ++p) {
     for (const char* map : {"value", "key", "query"}) {
-      if (std::string(map) != "value" && !attention) continue;
+      if (std::string(map) != "value" && !library.has_attention_) continue;
       auto layers = library.policy_.Mlp(absl::StrCat("part", p, "_", map));
       if (!layers.ok()) return layers.status();
       if (layers->empty()) return invalid(absl::StrCat("no part", p, "_", map, " weights (an incomplete attention)"));
-      (std::string(map) == "value" ? library.values_ : std::string(map) == "key" ? library.keys_ : library.queries_)
-          .push_back(*std::move(layers));
     }
   }
   for (const char* name : {"obs_mean", "obs_var"}) {
@@ -139,7 +137,7 @@ ModelConfig SkillLibrary::ConfigFor(ModelConfig config) const {
   config.controller_input = ModelConfig::ControllerInput::kProprioception;
   config.whole_body = false;
   config.attention_hidden = attention_hidden_;
-  config.attention = !keys_.empty();
+  config.attention = has_attention_;
   return config;
 }
 
@@ -163,19 +161,10 @@ absl::Status SkillLibrary::LoadControllers(ModSkillPolicyImpl& policy) const {
 }
 
 absl::Status SkillLibrary::LoadAttention(SkillAttentionImpl& attention) const {
-  if (attention.values().size() != num_parts() || attention.uses_attention() != !keys_.empty()) {
+  if (attention.values().size() != num_parts() || attention.uses_attention() != has_attention_) {
     return Misfit("its attention does not fit the task policy's (parts or attention maps differ)");
   }
-  for (size_t p = 0; p < num_parts(); ++p) {
-    const std::string what = absl::StrCat(path(), ": part ", p, " attention");
-    Mlp value = attention.values()[p];  // handles that can be written through
-    if (absl::Status status = CopyIntoMlp(values_[p], *value, what); !status.ok()) return status;
-    if (!keys_.empty()) {
-      Mlp key = attention.keys()[p], query = attention.queries()[p];
-      if (absl::Status status = CopyIntoMlp(keys_[p], *key, what); !status.ok()) return status;
-      if (absl::Status status = CopyIntoMlp(queries_[p], *query, what); !status.ok()) return status;
-    }
-  }
+  if (absl::Status status = CopyAttentionFrom(policy_, attention); !status.ok()) return status;
   for (torch::Tensor& parameter : attention.parameters()) parameter.set_requires_grad(false);
   return absl::OkStatus();
 }

@@ -66,8 +66,8 @@ class SkillLibrary {
   int64_t embed_dim_ = 0;
   std::vector<int64_t> controller_hidden_;
   std::vector<std::vector<LinearWeights>> controllers_;  // per part
-  // The attention's maps per part (keys and queries empty without attention).
-  std::vector<std::vector<LinearWeights>> values_, keys_, queries_;
+  // The attention's shape (its maps are copied from policy_ when a task policy loads them).
+  bool has_attention_ = false;
   std::vector<int64_t> attention_hidden_;
 };
 

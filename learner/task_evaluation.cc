@@ -55,17 +55,9 @@ absl::Status CopyTaskPolicy(const ExportedPolicy& exported, ModSkillPolicyImpl& 
   if (policy.config().task_skill_prior != policy.uses_skill_prior()) {
     return Invalid(exported.path, "its skill prior does not fit the session (no reference features to read)");
   }
-  std::vector<std::pair<std::string, Mlp>> maps;
-  for (size_t p = 0; policy.uses_skill_prior() && p < policy.controllers().size(); ++p) {
-    maps.emplace_back(absl::StrCat("part", p, "_value"), policy.attention()->values()[p]);
-    if (!policy.attention()->uses_attention()) continue;
-    maps.emplace_back(absl::StrCat("part", p, "_key"), policy.attention()->keys()[p]);
-    maps.emplace_back(absl::StrCat("part", p, "_query"), policy.attention()->queries()[p]);
-  }
-  for (auto& [prefix, mlp] : maps) {
-    auto layers = exported.Mlp(prefix);
-    if (!layers.ok()) return layers.status();
-    if (absl::Status status = CopyIntoMlp(*layers, *mlp, exported.path + ": " + prefix); !status.ok()) return status;
+  if (policy.uses_skill_prior()) {
+    SkillAttention attention = policy.attention();  // a handle that can be written through
+    if (absl::Status status = CopyAttentionFrom(exported, *attention); !status.ok()) return status;
   }
   for (size_t p = 0; p < policy.controllers().size(); ++p) {
     auto layers = exported.Mlp(absl::StrCat("part", p, "_controller"));
