@@ -43,10 +43,7 @@ void TrackingEnv::ResetTo(int clip, int frame, EnvRow row) {
   frame_ = std::clamp(frame, 0, motion.num_frames - 2);
   episode_steps_ = 0;
   loop_motion_ = PlanarMotion();
-  if (LoopsClip()) {
-    cycle_motion_ = ClipCycleMotion(motion);
-    next_loop_motion_ = loop_motion_.After(cycle_motion_);
-  }
+  if (LoopsClip()) cycle_motion_ = ClipCycleMotion(motion);
   finished_ = false;
   SetSimulationToReference(*context_->humanoid, motion, frame_, data_);
   if (goal_task_ != nullptr) {
@@ -89,8 +86,8 @@ int TrackingEnv::NextFrame() const {
   return std::min(frame_ + 1, last);
 }
 
-const PlanarMotion& TrackingEnv::LoopMotionOf(int frame) const {
-  return frame < frame_ ? next_loop_motion_ : loop_motion_;
+PlanarMotion TrackingEnv::LoopMotionOf(int frame) const {
+  return frame < frame_ ? loop_motion_.After(cycle_motion_) : loop_motion_;
 }
 
 void TrackingEnv::Step(const float* action, EnvRow row) {
@@ -107,11 +104,9 @@ void TrackingEnv::Step(const float* action, EnvRow row) {
                        &motion.dof_pos[static_cast<size_t>(next_frame) * motion.num_hinges()], pd_targets_.data());
   const double power = pd_.Step(pd_targets_.data(), data_);
   ++episode_steps_;
-  if (LoopsClip() && next_frame < frame_) {
-    loop_motion_ = next_loop_motion_;
-    next_loop_motion_ = loop_motion_.After(cycle_motion_);
-  }
-  frame_ = goal_task_ != nullptr || LoopsClip() ? next_frame : frame_ + 1;
+  if (LoopsClip()) loop_motion_ = LoopMotionOf(next_frame);
+  // A tracking episode ends on reaching the last frame, so a step never starts there.
+  frame_ = next_frame;
   if (PhysicsDiverged()) {
     EndOnBlowUp(row);
     return;
@@ -259,10 +254,11 @@ void TrackingEnv::WriteObservation(EnvRow row) {
   float* obs = &out.obs[static_cast<size_t>(i) * spec.obs_size];
   ReadSimulatedState(*context_->humanoid, data_, &sim_);
   if (goal_task_ != nullptr) {
-    // The base motion's next frame, carried onto the character from the frame before it.
+    // The base motion's next frame, carried onto the character from the frame before it (a loop
+    // goes on at frame 1, so there always is one).
     const int next_frame = NextFrame();
     ReadReferenceState(motion, next_frame, &target_);
-    ReadReferenceState(motion, std::max(next_frame - 1, 0), &reference_);
+    ReadReferenceState(motion, next_frame - 1, &reference_);
     AnchorToCharacter(reference_, sim_, &target_);
     WriteTrackingObservation(spec, sim_, target_, obs);
     goal_task_->WriteGoal(sim_, data_, obs + spec.goal_obs.start);

@@ -19,8 +19,8 @@
 #include "absl/strings/string_view.h"
 #include "common/policy/termination.h"
 #include "server/core/curriculum/clip_sampler.h"
-#include "server/core/env/base_motion_anchor.h"
 #include "server/core/env/action_mapping.h"
+#include "server/core/env/base_motion_anchor.h"
 #include "server/core/env/batch_buffers.h"
 #include "server/core/env/env_spec.h"
 #include "server/core/env/fall_detection.h"
@@ -126,8 +126,9 @@ class TrackingEnv {
   // looping clips go on at frame 1.
   int NextFrame() const;
   bool LoopsClip() const { return context_->config.loop_clips && goal_task_ == nullptr; }
-  // Where the reference of `frame`, the next frame or the current one, lies in this loop.
-  const PlanarMotion& LoopMotionOf(int frame) const;
+  // Where the reference of `frame`, the next frame or the current one, lies in this loop (the
+  // next cycle's when `frame` wrapped).
+  PlanarMotion LoopMotionOf(int frame) const;
   // Errors over the VR bodies only (VR tracking's success and errors).
   TrackingErrors VrErrors() const;
   // Mean body distance per part of the layout between sim_ and reference_ (one float per part).
@@ -145,9 +146,9 @@ class TrackingEnv {
   // joining or leaving) without disturbing an episode in progress.
   std::shared_ptr<const MotionClip> motion_;
   int clip_ = 0;
-  // A looping clip: where the current cycle's reference lies (the clip's own displacement, once per
-  // cycle), and the next cycle's.
-  PlanarMotion loop_motion_, next_loop_motion_, cycle_motion_;
+  // A looping clip: where the current cycle's reference lies, and the clip's own displacement per
+  // cycle.
+  PlanarMotion loop_motion_, cycle_motion_;
   int frame_ = 0;
   int episode_steps_ = 0;
   bool finished_ = false;
