@@ -26,10 +26,15 @@ std::vector<torch::Tensor> TrainableParameters(ModSkillPolicyImpl& policy, Criti
   return parameters;
 }
 
-// A non-finite loss skips its minibatch; non-finite weights after the update roll back to the
-// weights it started from.
+int64_t MinibatchesPerEpoch(int64_t size, int64_t minibatch_size) {
+  return size == 0 ? 0 : size / std::min<int64_t>(minibatch_size, size);
+}
+
+// A non-finite loss skips its minibatch (on every rank); non-finite weights after the update roll
+// back to the weights it started from.
 PpoUpdateStats UpdateWithPpo(ModSkillPolicyImpl& policy, CriticImpl& critic, torch::optim::Optimizer& optimizer,
-                             const PpoBatch& batch, const PpoSettings& settings, torch::Generator& generator) {
+                             const PpoBatch& batch, const PpoSettings& settings, torch::Generator& generator,
+                             const GradientAverager& average) {
   PpoUpdateStats stats;
   std::vector<torch::Tensor>& params = optimizer.param_groups()[0].params();
   std::vector<torch::Tensor> snapshot;
@@ -37,10 +42,12 @@ PpoUpdateStats UpdateWithPpo(ModSkillPolicyImpl& policy, CriticImpl& critic, tor
   const torch::Tensor log_std = policy.log_std();
   const int64_t size = batch.obs.size(0);
   const int64_t minibatch = std::min<int64_t>(settings.minibatch_size, size);
-  for (int epoch = 0; epoch < settings.epochs; ++epoch) {
+  const int64_t steps = settings.minibatches_per_epoch >= 0 ? settings.minibatches_per_epoch
+                                                            : MinibatchesPerEpoch(size, settings.minibatch_size);
+  for (int epoch = 0; epoch < settings.epochs && stats.error.ok(); ++epoch) {
     const torch::Tensor order = torch::randperm(size, generator);
-    for (int64_t begin = 0; begin + minibatch <= size; begin += minibatch) {
-      const torch::Tensor index = order.slice(0, begin, begin + minibatch);
+    for (int64_t step = 0; step < steps; ++step) {
+      const torch::Tensor index = order.slice(0, step * minibatch, (step + 1) * minibatch);
       const torch::Tensor obs = batch.obs.index_select(0, index);
       const torch::Tensor new_log_prob =
           ModSkillPolicyImpl::LogProb(policy.SampleMean(obs), log_std, batch.samples.index_select(0, index));
@@ -48,12 +55,25 @@ PpoUpdateStats UpdateWithPpo(ModSkillPolicyImpl& policy, CriticImpl& critic, tor
                                          batch.advantages.index_select(0, index), critic.forward(obs),
                                          batch.old_values.index_select(0, index), batch.returns.index_select(0, index),
                                          settings.clip_ratio, settings.value_clip, settings.value_coefficient);
-      if (!std::isfinite(loss.total.item<double>())) {
+      const bool finite = std::isfinite(loss.total.item<double>());
+      if (!finite && !average) {
         ++stats.skipped_updates;
         continue;
       }
       optimizer.zero_grad();
-      loss.total.backward();
+      if (finite) loss.total.backward();
+      if (average) {
+        // Every rank takes this step or none does, with the same averaged gradients.
+        const absl::StatusOr<bool> all_finite = average(params, finite);
+        if (!all_finite.ok()) {
+          stats.error = all_finite.status();
+          break;
+        }
+        if (!*all_finite) {
+          ++stats.skipped_updates;
+          continue;
+        }
+      }
       torch::nn::utils::clip_grad_norm_(params, settings.max_grad_norm);
       optimizer.step();
       stats.policy_loss += loss.policy_loss.item<double>();

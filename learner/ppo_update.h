@@ -5,9 +5,12 @@
 #define MODSKILL_LEARNER_PPO_UPDATE_H_
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include <torch/torch.h>
+
+#include "absl/status/statusor.h"
 
 #include "learner/critic.h"
 #include "learner/modskill_policy.h"
@@ -18,7 +21,16 @@ struct PpoSettings {
   int epochs = 2;
   int64_t minibatch_size = 2048;
   double clip_ratio = 0.2, value_clip = 0.2, value_coefficient = 2.0, max_grad_norm = 1.0;
+  // Data-parallel learners: minibatch steps per epoch, the same on every rank (-1: as many as the
+  // batch holds).
+  int64_t minibatches_per_epoch = -1;
 };
+
+// Data-parallel learners (data_parallel.h): called after every minibatch's backward pass (with
+// `finite` false, and no backward, when the loss was not finite) to average the gradients of
+// `params` across ranks. Returns whether to step: false when any rank's loss was not finite; an
+// error when the ranks could not be reached.
+using GradientAverager = std::function<absl::StatusOr<bool>(const std::vector<torch::Tensor>& params, bool finite)>;
 
 // One iteration's experience, [N, ...]: normalized observations, the sampled PPO actions
 // ([N, sample_size]), and the behaviour's log-probabilities, values, advantages and returns.
@@ -31,16 +43,21 @@ struct PpoUpdateStats {
   int updates = 0;          // minibatch steps taken
   int skipped_updates = 0;  // minibatches skipped for a non-finite loss, plus 1 for a rollback
   bool rolled_back = false;  // non-finite weights after the update: the weights it started from are back
+  absl::Status error;        // from the GradientAverager; the update stopped there
 };
 
 // What the optimizer trains: the parameters of `policy` that require gradients (not the frozen
 // skills of a task policy), then the critic's.
 std::vector<torch::Tensor> TrainableParameters(ModSkillPolicyImpl& policy, CriticImpl& critic);
 
+// Minibatch steps per epoch over `size` samples: whole minibatches of min(minibatch_size, size).
+int64_t MinibatchesPerEpoch(int64_t size, int64_t minibatch_size);
+
 // Runs settings.epochs epochs over `batch` with `optimizer` (built on TrainableParameters),
-// minibatch order from `generator`.
+// minibatch order from `generator`; `average` (optional) averages the gradients across ranks.
 PpoUpdateStats UpdateWithPpo(ModSkillPolicyImpl& policy, CriticImpl& critic, torch::optim::Optimizer& optimizer,
-                             const PpoBatch& batch, const PpoSettings& settings, torch::Generator& generator);
+                             const PpoBatch& batch, const PpoSettings& settings, torch::Generator& generator,
+                             const GradientAverager& average = nullptr);
 
 }  // namespace modskill::learner
 

@@ -14,9 +14,21 @@ class RunningMeanStdImpl : public torch::nn::Module {
  public:
   explicit RunningMeanStdImpl(int64_t size);
 
+  // The moments of some samples: their count, mean [D] and population variance [D], float64.
+  struct Moments {
+    double count = 0;
+    torch::Tensor mean, var;
+  };
+
   // batch: [B, D]. Merges the batch's mean and variance with the running ones by the parallel
   // algorithm of Chan, Golub, LeVeque (1979), in double precision. No gradient.
   void Update(const torch::Tensor& batch);
+  // batch: [B, D], B > 0 -> its moments, computed in the batch's own precision.
+  Moments BatchMoments(const torch::Tensor& batch) const;
+  // Merges moments (of one batch, or several combined) into the running ones, as Update does.
+  void Merge(const Moments& batch);
+  // The moments of the union of the samples of `a` and `b` (Chan et al.); either may be empty.
+  static Moments Combine(const Moments& a, const Moments& b);
 
   // Dims whose mean and var Update leaves as they are (mask: [D] bool), e.g. the self features of
   // a task policy, which its frozen skills must see normalized exactly as their tracker saw them.

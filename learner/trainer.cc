@@ -45,44 +45,60 @@ Trainer::Trainer(const TrainerConfig& config)
       curriculum_(config.curriculum_start > 0 ? config.curriculum_start : config.termination_distance,
                   config.curriculum_end > 0 ? config.curriculum_end : config.termination_distance),
       generator_(at::detail::createCPUGenerator(config.seed)),
-      acting_generator_(at::detail::createCPUGenerator(config.seed * 1000003 + 7919)) {}
+      acting_generator_(at::detail::createCPUGenerator(rank_seed() * 1000003 + 7919)) {}
 
 Trainer::~Trainer() { DiscardCollection(); }
 
 absl::StatusOr<std::unique_ptr<Trainer>> Trainer::Create(const TrainerConfig& config) {
   if (absl::Status status = config.Validate(); !status.ok()) return status;
-  std::error_code error;
-  std::filesystem::create_directories(config.run_dir, error);
-  if (error) return absl::PermissionDeniedError(absl::StrCat("--run_dir ", config.run_dir, ": ", error.message()));
-  const std::string probe = config.run_dir + "/.writable";
-  if (absl::Status status = WriteFileAtomically(probe, "ok"); !status.ok()) {
-    return absl::PermissionDeniedError(absl::StrCat("--run_dir ", config.run_dir, ": not writable: ", status.message()));
+  if (config.data_parallel.rank == 0) {  // the other ranks write nothing
+    std::error_code error;
+    std::filesystem::create_directories(config.run_dir, error);
+    if (error) return absl::PermissionDeniedError(absl::StrCat("--run_dir ", config.run_dir, ": ", error.message()));
+    const std::string probe = config.run_dir + "/.writable";
+    if (absl::Status status = WriteFileAtomically(probe, "ok"); !status.ok()) {
+      return absl::PermissionDeniedError(absl::StrCat("--run_dir ", config.run_dir, ": not writable: ", status.message()));
+    }
+    std::filesystem::remove(probe, error);
   }
-  std::filesystem::remove(probe, error);
   torch::manual_seed(config.seed);
   // Every iteration allocates and frees tens of MB of rollout and AMP tensors; glibc returns such
   // blocks to the kernel, and faulting them back in cost ~0.15 s per 100 MB. Keep them.
   mallopt(M_MMAP_THRESHOLD, 1 << 30);
   mallopt(M_TRIM_THRESHOLD, 1 << 30);
   std::unique_ptr<Trainer> trainer(new Trainer(config));
+  if (config.data_parallel.world_size > 1) {
+    if (absl::Status status = trainer->JoinRanks(); !status.ok()) return trainer->ReportToRanks(status);
+  }
   if (!IsTrackingTask(config.task)) {
-    if (absl::Status status = trainer->PrepareTask(); !status.ok()) return status;
+    if (absl::Status status = trainer->PrepareTask(); !status.ok()) return trainer->ReportToRanks(status);
   }
   absl::StatusOr<std::unique_ptr<ServerPool>> pool = ServerPool::Create(trainer->PoolOptions());
-  if (!pool.ok()) return pool.status();
+  if (!pool.ok()) return trainer->ReportToRanks(pool.status());
   trainer->servers_ = *std::move(pool);
-  if (absl::Status status = trainer->WaitForServers(); !status.ok()) return status;
-  if (absl::Status status = trainer->BuildNetworks(*trainer->servers_->spec()); !status.ok()) return status;
-  const std::string checkpoint = config.run_dir + "/checkpoint.pt";
-  if (config.resume) {
-    if (absl::Status status = trainer->LoadCheckpoint(checkpoint); !status.ok()) return status;
-    LogLine("resumed %s at iteration %d (%lld env steps)", checkpoint, trainer->iteration_,
-            static_cast<long long>(trainer->env_steps_));
-  }
-  if (absl::Status status = WriteFileAtomically(config.run_dir + "/config.json", trainer->config_.ToJson()); !status.ok()) {
-    return status;
+  if (absl::Status status = trainer->WaitForServers(); !status.ok()) return trainer->ReportToRanks(status);
+  if (absl::Status status = trainer->PrepareState(); !status.ok()) return trainer->ReportToRanks(status);
+  if (trainer->writes_run_dir()) {
+    if (absl::Status status = WriteFileAtomically(config.run_dir + "/config.json", trainer->config_.ToJson());
+        !status.ok()) {
+      return trainer->ReportToRanks(status);
+    }
   }
   return trainer;
+}
+
+absl::Status Trainer::PrepareState() {
+  if (absl::Status status = BuildNetworks(*servers_->spec()); !status.ok()) return status;
+  if (config_.resume && writes_run_dir()) {  // the other ranks get rank 0's state below
+    const std::string checkpoint = config_.run_dir + "/checkpoint.pt";
+    if (absl::Status status = LoadCheckpoint(checkpoint); !status.ok()) return status;
+    LogLine("resumed %s at iteration %d (%lld env steps)", checkpoint, iteration_, static_cast<long long>(env_steps_));
+  }
+  return data_parallel_ ? ShareStartState() : absl::OkStatus();
+}
+
+uint64_t Trainer::rank_seed() const {
+  return config_.seed + 1000003ull * static_cast<uint64_t>(config_.data_parallel.rank);
 }
 
 ServerPoolOptions Trainer::PoolOptions() const {
@@ -118,7 +134,7 @@ absl::Status Trainer::WaitForServers() {
   const absl::Time start = absl::Now();
   bool announced = false;
   while (true) {
-    if (servers_->Reconnect(static_cast<int64_t>(config_.seed) + iteration_) > 0) return absl::OkStatus();
+    if (servers_->Reconnect(static_cast<int64_t>(rank_seed()) + iteration_) > 0) return absl::OkStatus();
     const absl::Duration waited = absl::Now() - start;
     if (waited > absl::Seconds(config_.server_timeout_s)) {
       std::string tried;
@@ -176,19 +192,23 @@ absl::Status Trainer::Run(const std::function<void(const IterationStats&)>& on_i
     ~DiscardAtExit() { trainer->DiscardCollection(); }
   } discard{this};
   while (iteration_ < last) {
-    if (stop != nullptr && stop->load()) break;
+    // Data-parallel ranks stop together: a signal or a time budget on one stops them all.
+    const absl::StatusOr<bool> stopping = AnyRankStops(stop != nullptr && stop->load());
+    if (!stopping.ok()) return ReportToRanks(stopping.status());
+    if (*stopping) break;
     absl::StatusOr<IterationStats> stats;
     try {
       torch::AutoGradMode grad(true);  // whatever the caller's mode, the update needs gradients
       stats = Iterate();
     } catch (const std::exception& e) {
       std::string message = e.what();
-      return absl::InternalError(absl::StrCat("iteration ", iteration_ + 1, ": ", message.substr(0, message.find('\n'))));
+      return ReportToRanks(
+          absl::InternalError(absl::StrCat("iteration ", iteration_ + 1, ": ", message.substr(0, message.find('\n')))));
     }
-    if (!stats.ok()) return stats.status();
+    if (!stats.ok()) return ReportToRanks(stats.status());
     history_.push_back(*stats);
     if (on_iteration) on_iteration(*stats);
-    if (iteration_ % config_.checkpoint_every == 0 || iteration_ == last) {
+    if (writes_run_dir() && (iteration_ % config_.checkpoint_every == 0 || iteration_ == last)) {
       if (absl::Status status = SaveCheckpoint(config_.run_dir + "/checkpoint.pt"); !status.ok()) return status;
       if (absl::Status status = ExportPolicy(config_.run_dir + "/policy.pt"); !status.ok()) return status;
     }
@@ -199,11 +219,13 @@ absl::Status Trainer::Run(const std::function<void(const IterationStats&)>& on_i
 absl::StatusOr<IterationStats> Trainer::Iterate() {
   IterationStats stats;
   const auto start = Clock::now();
+  const double collective_seconds = data_parallel_ ? data_parallel_->collective_seconds() : 0;
+  const int64_t collective_bytes = data_parallel_ ? data_parallel_->collective_bytes() : 0;
   Collection collection;
   if (pending_.valid()) {
     collection = std::move(*pending_.get());  // collected while the last update ran
   } else {
-    servers_->Reconnect(static_cast<int64_t>(config_.seed) + iteration_ + 1);
+    servers_->Reconnect(static_cast<int64_t>(rank_seed()) + iteration_ + 1);
     if (servers_->Alive().empty()) {
       if (absl::Status status = WaitForServers(); !status.ok()) return status;
     }
@@ -216,14 +238,17 @@ absl::StatusOr<IterationStats> Trainer::Iterate() {
   for (SlotRollout& r : collection.rollouts) {
     if (!r.failed) usable.push_back(&r);
   }
-  if (usable.empty()) {
-    // Every server failed during this iteration: nothing to learn from; try again.
+  if (data_parallel_) data_parallel_->MarkIteration(iteration_);
+  const absl::StatusOr<bool> every_rank_has_experience = OnEveryRank(!usable.empty());
+  if (!every_rank_has_experience.ok()) return every_rank_has_experience.status();
+  if (!*every_rank_has_experience) {
+    // Every server (of a rank) failed during this iteration: nothing to learn from; try again.
     stats.iteration = iteration_;
     stats.env_steps = env_steps_;
     LogLine("iteration %d: every session failed while collecting; retrying", iteration_ + 1);
     return stats;
   }
-  SummarizeEpisodes(&stats);
+  if (absl::Status status = SummarizeEpisodes(&stats); !status.ok()) return status;
   SummarizeTaskEpisodes(collection, &stats);
   const ScopedTorchThreads threads(UpdateThreads());  // the servers wait from here on
   TrainingBatch batch = ComputeReturns(usable);
@@ -235,17 +260,25 @@ absl::StatusOr<IterationStats> Trainer::Iterate() {
     ReportFailures();
   }
   if (config_.collect_during_update) {
-    servers_->Reconnect(static_cast<int64_t>(config_.seed) + iteration_ + 2);
+    servers_->Reconnect(static_cast<int64_t>(rank_seed()) + iteration_ + 2);
     if (!servers_->Alive().empty()) StartCollection();
   }
   const auto update_start = Clock::now();
-  UpdatePolicy(batch, &stats);
+  if (absl::Status status = UpdatePolicy(batch, &stats); !status.ok()) return status;
   ++policy_version_;
-  if (expert.defined()) UpdateDiscriminator(batch, expert, &stats);
+  if (expert.defined()) {
+    if (absl::Status status = UpdateDiscriminator(batch, expert, &stats); !status.ok()) return status;
+  }
+  std::vector<double> samples = {batch.samples};  // every rank's, in data-parallel runs
+  if (absl::Status status = SumOverRanks(&samples); !status.ok()) return status;
   ++iteration_;
-  env_steps_ += static_cast<int64_t>(batch.samples);
+  env_steps_ += static_cast<int64_t>(samples[0]);
   stats.update_seconds = std::chrono::duration<double>(Clock::now() - update_start).count();
-  stats.env_steps_per_second = batch.samples / std::chrono::duration<double>(Clock::now() - start).count();
+  stats.env_steps_per_second = samples[0] / std::chrono::duration<double>(Clock::now() - start).count();
+  if (data_parallel_) {
+    stats.allreduce_seconds = data_parallel_->collective_seconds() - collective_seconds;
+    stats.allreduce_bytes = data_parallel_->collective_bytes() - collective_bytes;
+  }
   Summarize(batch, &stats);
   return stats;
 }
@@ -293,19 +326,23 @@ void Trainer::Summarize(const TrainingBatch& batch, IterationStats* stats) {
   stats->live_sessions = batch.live_sessions;
 }
 
-void Trainer::SummarizeEpisodes(IterationStats* stats) {
-  if (!recent_returns_.empty()) {
-    double r = 0, l = 0, tracked = 0;
-    for (size_t i = 0; i < recent_returns_.size(); ++i) {
-      r += recent_returns_[i];
-      l += recent_lengths_[i];
-      tracked += recent_tracked_[i];
-    }
-    stats->mean_episode_return = r / recent_returns_.size();
-    stats->mean_episode_length = l / recent_lengths_.size();
-    stats->tracked_share = tracked / recent_tracked_.size();
+absl::Status Trainer::SummarizeEpisodes(IterationStats* stats) {
+  // Episodes, and the sums of their returns, lengths and tracked flags: every rank's, so that
+  // the curriculum moves alike on every rank.
+  std::vector<double> sums = {static_cast<double>(recent_returns_.size()), 0, 0, 0};
+  for (size_t i = 0; i < recent_returns_.size(); ++i) {
+    sums[1] += recent_returns_[i];
+    sums[2] += recent_lengths_[i];
+    sums[3] += recent_tracked_[i];
+  }
+  if (absl::Status status = SumOverRanks(&sums); !status.ok()) return status;
+  if (sums[0] > 0) {
+    stats->mean_episode_return = sums[1] / sums[0];
+    stats->mean_episode_length = sums[2] / sums[0];
+    stats->tracked_share = sums[3] / sums[0];
     curriculum_.Update(stats->tracked_share);
   }
+  return absl::OkStatus();
 }
 
 }  // namespace modskill::learner

@@ -21,7 +21,9 @@
 #include "learner/acting_networks.h"
 #include "learner/amp_discriminator.h"
 #include "learner/critic.h"
+#include "learner/data_parallel.h"
 #include "learner/modskill_policy.h"
+#include "learner/ppo_update.h"
 #include "learner/running_mean_std.h"
 #include "learner/server_pool.h"
 #include "learner/skill_library.h"
@@ -56,6 +58,9 @@ struct IterationStats {
   // iteration's collection; NaN when none ended (and in tracking runs).
   double normalized_return = std::numeric_limits<double>::quiet_NaN();
   int task_episodes = 0;  // those episodes
+  // Data-parallel runs: this rank's time in, and bytes sent into, collectives this iteration.
+  double allreduce_seconds = 0;
+  int64_t allreduce_bytes = 0;
 };
 
 class Trainer {
@@ -74,7 +79,12 @@ class Trainer {
   double termination_distance() const { return curriculum_.distance(); }
   const std::vector<IterationStats>& history() const { return history_; }
   ModSkillPolicy& policy() { return policy_; }
+  Critic& critic() { return critic_; }
+  AmpDiscriminator& discriminator() { return discriminator_; }
   RunningMeanStd& obs_norm() { return obs_norm_; }
+  RunningMeanStd& amp_norm() { return amp_norm_; }
+  // Whether this learner writes the run's files: rank 0 of a data-parallel group, or alone.
+  bool writes_run_dir() const { return config_.data_parallel.rank == 0; }
   ServerPool& servers() { return *servers_; }
   // The sessions' env spec (the task session's in a task run), and the config as the run uses it
   // (a task run takes its controller sizes and action mapping from the skills).
@@ -84,6 +94,9 @@ class Trainer {
   // Full training state (networks, optimizers, normalizers, counters), written atomically.
   absl::Status SaveCheckpoint(const std::string& path);
   absl::Status LoadCheckpoint(const std::string& path);
+  // The same state as bytes, and restored from bytes (`origin` names them in errors).
+  absl::StatusOr<std::string> SerializeState();
+  absl::Status RestoreState(const std::string& bytes, const std::string& origin);
   // The TorchScript policy the server's Rollout and Python's torch.jit.load run.
   absl::Status ExportPolicy(const std::string& path);
 
@@ -93,6 +106,30 @@ class Trainer {
   ServerPoolOptions PoolOptions() const;
   absl::Status WaitForServers();
   absl::Status BuildNetworks(const v1::EnvSpec& spec);
+  // Networks, then the resumed checkpoint (rank 0), then the start state shared by every rank.
+  absl::Status PrepareState();
+  // Seeds of what must differ between data-parallel ranks (sessions, action noise, reference
+  // samples): config.seed on rank 0 and alone.
+  uint64_t rank_seed() const;
+
+  // Data-parallel learners (trainer_data_parallel.cc). Joins the group and checks that the ranks'
+  // settings agree, before any server is contacted.
+  absl::Status JoinRanks();
+  // Once the networks are built (and rank 0 resumed): the ranks' layouts agree and rank 0's whole
+  // state (weights, optimizers, normalizers, counters) replaces every other rank's.
+  absl::Status ShareStartState();
+  // The averaged-gradient hook of the PPO and discriminator updates (null when alone).
+  GradientAverager Averager();
+  // Whether `mine` holds on every rank (alone: `mine`).
+  absl::StatusOr<bool> OnEveryRank(bool mine);
+  // Sums `values` over the ranks (alone: unchanged).
+  absl::Status SumOverRanks(std::vector<double>* values);
+  // Merges `batch` into `stats`: over every rank's batch when data-parallel.
+  absl::Status UpdateStats(RunningMeanStdImpl& stats, const torch::Tensor& batch);
+  // Whether any rank was asked to stop (alone: `stop`).
+  absl::StatusOr<bool> AnyRankStops(bool stop);
+  // `status`, after posting it for the other ranks to name.
+  absl::Status ReportToRanks(absl::Status status);
   // A task run (trainer_task.cc), before any session opens: loads the skills (errors name the
   // file), takes their action mapping, and checks that the first server offers config_.task
   // (INVALID_ARGUMENT naming --task otherwise), keeping its tracking spec.
@@ -130,13 +167,13 @@ class Trainer {
   // amp_samples x discriminator_epochs random rows of `amp_rows` (one tensor per session) among
   // its `live_rows` (indices of rows whose episode did not end).
   torch::Tensor SampleLiveAmp(const std::vector<torch::Tensor>& amp_rows, const std::vector<torch::Tensor>& live_rows);
-  void UpdatePolicy(const TrainingBatch& batch, IterationStats* stats);
+  absl::Status UpdatePolicy(const TrainingBatch& batch, IterationStats* stats);
   // amp_samples reference AMP observations from `source`'s server ([0, M] when it cannot answer).
   torch::Tensor FetchReferenceAmp(SessionSlot* source);
   // The discriminator: `expert` (reference) samples against the policy's own.
-  void UpdateDiscriminator(const TrainingBatch& batch, const torch::Tensor& expert, IterationStats* stats);
-  // Episode figures of the recently ended episodes; moves the termination curriculum.
-  void SummarizeEpisodes(IterationStats* stats);
+  absl::Status UpdateDiscriminator(const TrainingBatch& batch, const torch::Tensor& expert, IterationStats* stats);
+  // Episode figures of the recently ended episodes (every rank's); moves the termination curriculum.
+  absl::Status SummarizeEpisodes(IterationStats* stats);
   void Summarize(const TrainingBatch& batch, IterationStats* stats);
   // Notes how the episodes that ended in `result` went, for the session's failure report;
   // `done` and `truncated` are the result's flags as RecordStep decoded them (one per env).
@@ -148,6 +185,7 @@ class Trainer {
   void SummarizeTaskEpisodes(const Collection& collection, IterationStats* stats) const;
 
   TrainerConfig config_;
+  std::unique_ptr<DataParallel> data_parallel_;  // null when alone
   std::unique_ptr<ServerPool> servers_;
   v1::EnvSpec spec_;
   NetworkLayout layout_;

@@ -13,6 +13,12 @@
 namespace modskill::learner {
 
 absl::Status Trainer::SaveCheckpoint(const std::string& path) {
+  absl::StatusOr<std::string> state = SerializeState();
+  if (!state.ok()) return absl::Status(state.status().code(), absl::StrCat(path, ": ", state.status().message()));
+  return WriteFileAtomically(path, *state);
+}
+
+absl::StatusOr<std::string> Trainer::SerializeState() {
   try {
     torch::serialize::OutputArchive archive;
     auto add_module = [&](const char* key, const torch::nn::Module& module) {
@@ -39,22 +45,36 @@ absl::Status Trainer::SaveCheckpoint(const std::string& path) {
     archive.write("residual_scale", torch::tensor(config_.residual_scale, torch::kFloat64));
     archive.write("termination_distance", torch::tensor(curriculum_.distance(), torch::kFloat64));
     archive.write("task", c10::IValue(layout_.task));
+    archive.write("world_size", torch::tensor(static_cast<int64_t>(config_.data_parallel.world_size)));
     std::ostringstream out(std::ios::binary);
     archive.save_to(out);
-    return WriteFileAtomically(path, out.str());
+    return out.str();
   } catch (const std::exception& e) {
     std::string message = e.what();
-    return absl::InternalError(absl::StrCat(path, ": cannot write checkpoint: ", message.substr(0, message.find('\n'))));
+    return absl::InternalError(absl::StrCat("cannot write checkpoint: ", message.substr(0, message.find('\n'))));
   }
 }
 
 absl::Status Trainer::LoadCheckpoint(const std::string& path) {
   auto bytes = ReadFileToString(path, size_t{4} << 30);
   if (!bytes.ok()) return bytes.status();
+  return RestoreState(*bytes, path);
+}
+
+absl::Status Trainer::RestoreState(const std::string& bytes, const std::string& path) {
   try {
     torch::serialize::InputArchive archive;
-    std::istringstream in(*bytes, std::ios::binary);
+    std::istringstream in(bytes, std::ios::binary);
     archive.load_from(in);
+    // Each data-parallel rank's batch is a share of the step's: a run resumes with its world size
+    // (checkpoints from before data-parallel runs had one learner).
+    torch::Tensor world_size = torch::tensor(int64_t{1});
+    archive.try_read("world_size", world_size);
+    if (world_size.item<int64_t>() != config_.data_parallel.world_size) {
+      return absl::FailedPreconditionError(absl::StrCat(path, ": trained with --world_size ", world_size.item<int64_t>(),
+                                                        "; resume with --world_size ", world_size.item<int64_t>(),
+                                                        ", not ", config_.data_parallel.world_size));
+    }
     // Checkpoints from before tasks were trackers.
     c10::IValue stored_task{std::string(kTrackingTask)};
     archive.try_read("task", stored_task);

@@ -118,6 +118,7 @@ absl::Status TrainerConfig::Validate() const {
     return absl::InvalidArgumentError(absl::StrCat("--termination_bodies: ", bodies.status().message()));
   }
   if (absl::Status status = ValidateTask(*this); !status.ok()) return status;
+  if (absl::Status status = ValidateDataParallelOptions(data_parallel); !status.ok()) return status;
   if (curriculum_start != 0 || curriculum_end != 0) {
     if (!ValidateTerminationDistance(curriculum_start).ok() || !ValidateTerminationDistance(curriculum_end).ok()) {
       return absl::InvalidArgumentError(absl::StrCat("--termination_curriculum: ", curriculum_start, ":",
@@ -199,6 +200,10 @@ std::string TrainerConfig::ToJson() const {
                              {"max_speed", task_max_speed},
                              {"min_goal_interval_s", task_min_goal_interval_s},
                              {"max_goal_interval_s", task_max_goal_interval_s}};
+  }
+  if (data_parallel.world_size > 1) {
+    json["world_size"] = data_parallel.world_size;
+    json["rendezvous"] = data_parallel.rendezvous;
   }
   return json.dump(1);
 }

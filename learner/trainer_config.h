@@ -8,6 +8,7 @@
 #include "absl/status/statusor.h"
 #include "common/policy/action_mode.h"
 #include "common/policy/termination.h"
+#include "learner/data_parallel_options.h"
 #include "learner/model_config.h"
 
 namespace modskill {
@@ -86,6 +87,10 @@ struct TrainerConfig {
   int amp_samples = 2048;  // expert and policy samples per discriminator epoch
   uint64_t seed = 1;
   int report_every = 5;  // iterations between failure reports to the servers' samplers; 0: never
+
+  // Data-parallel learners (data_parallel.h): this learner's rank among world_size, each driving
+  // its own servers; rank 0 alone writes to run_dir.
+  DataParallelOptions data_parallel;
 
   // Where results go.
   std::string run_dir;

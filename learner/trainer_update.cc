@@ -98,7 +98,7 @@ torch::Tensor Trainer::SampleLiveAmp(const std::vector<torch::Tensor>& amp_rows,
 
 // PPO (ppo_update.h). Iterate gives the update phases config.update_threads torch threads while
 // the servers wait.
-void Trainer::UpdatePolicy(const TrainingBatch& batch, IterationStats* stats) {
+absl::Status Trainer::UpdatePolicy(const TrainingBatch& batch, IterationStats* stats) {
   PpoSettings settings;
   settings.epochs = config_.epochs;
   settings.minibatch_size = config_.minibatch_size;
@@ -106,8 +106,15 @@ void Trainer::UpdatePolicy(const TrainingBatch& batch, IterationStats* stats) {
   settings.value_clip = config_.value_clip;
   settings.value_coefficient = config_.value_coefficient;
   settings.max_grad_norm = config_.max_grad_norm;
+  if (data_parallel_) {  // every rank steps as often as the smallest batch allows
+    const absl::StatusOr<double> steps =
+        data_parallel_->AllReduceMin(MinibatchesPerEpoch(batch.obs.size(0), config_.minibatch_size));
+    if (!steps.ok()) return steps.status();
+    settings.minibatches_per_epoch = static_cast<int64_t>(*steps);
+  }
   const PpoBatch ppo{batch.obs, batch.actions, batch.old_log_prob, batch.old_values, batch.advantages, batch.returns};
-  const PpoUpdateStats update = UpdateWithPpo(*policy_, *critic_, *optimizer_, ppo, settings, generator_);
+  const PpoUpdateStats update = UpdateWithPpo(*policy_, *critic_, *optimizer_, ppo, settings, generator_, Averager());
+  if (!update.error.ok()) return update.error;
   stats->skipped_updates += update.skipped_updates;
   if (update.rolled_back) {
     LogLine("iteration %d: non-finite weights after the update; kept the last good ones", iteration_ + 1);
@@ -121,7 +128,7 @@ void Trainer::UpdatePolicy(const TrainingBatch& batch, IterationStats* stats) {
     stats->approx_kl = update.approx_kl;
     stats->clip_fraction = update.clip_fraction;
   }
-  obs_norm_->Update(batch.raw_obs);
+  return UpdateStats(*obs_norm_, batch.raw_obs);
 }
 
 torch::Tensor Trainer::FetchReferenceAmp(SessionSlot* source) {
@@ -129,7 +136,7 @@ torch::Tensor Trainer::FetchReferenceAmp(SessionSlot* source) {
   v1::SampleReferenceAmpRequest request;
   request.set_session_id(source->stream->opened().session_id());
   request.set_num_samples(config_.amp_samples);
-  request.set_seed(config_.seed * 1000003 + iteration_);
+  request.set_seed(rank_seed() * 1000003 + iteration_);
   auto reference = source->client->SampleReferenceAmp(request);
   if (!reference.ok()) {
     LogLine("iteration %d: no reference AMP samples (%s); discriminator not updated", iteration_ + 1,
@@ -146,9 +153,16 @@ torch::Tensor Trainer::FetchReferenceAmp(SessionSlot* source) {
   return *expert;
 }
 
-void Trainer::UpdateDiscriminator(const TrainingBatch& batch, const torch::Tensor& expert, IterationStats* stats) {
-  if (batch.policy_amp.size(0) == 0 || expert.size(0) == 0) return;
-  amp_norm_->Update(torch::cat({expert, batch.policy_amp}));
+absl::Status Trainer::UpdateDiscriminator(const TrainingBatch& batch, const torch::Tensor& expert,
+                                          IterationStats* stats) {
+  // Data-parallel ranks step together: all when every rank has both kinds of samples, or none.
+  const absl::StatusOr<bool> samples = OnEveryRank(batch.policy_amp.size(0) > 0 && expert.size(0) > 0);
+  if (!samples.ok()) return samples.status();
+  if (!*samples) return absl::OkStatus();
+  if (absl::Status status = UpdateStats(*amp_norm_, torch::cat({expert, batch.policy_amp})); !status.ok()) {
+    return status;
+  }
+  const GradientAverager average = Averager();
   double loss_sum = 0, expert_logit = 0, policy_logit = 0, penalty = 0;
   const torch::Tensor expert_normalized = amp_norm_->Normalize(expert).detach();
   for (int epoch = 0; epoch < config_.discriminator_epochs; ++epoch) {
@@ -159,12 +173,21 @@ void Trainer::UpdateDiscriminator(const TrainingBatch& batch, const torch::Tenso
     const torch::Tensor gradient_penalty = discriminator_->GradientPenalty(expert_in);
     AmpLossTerms loss = ComputeAmpLoss(discriminator_->forward(expert_in), discriminator_->forward(policy_in),
                                        gradient_penalty, config_.gradient_penalty_weight);
-    if (!std::isfinite(loss.total.item<double>())) {
+    const bool finite = std::isfinite(loss.total.item<double>());
+    if (!finite && !average) {
       ++stats->skipped_updates;
       continue;
     }
     discriminator_optimizer_->zero_grad();
-    loss.total.backward();
+    if (finite) loss.total.backward();
+    if (average) {
+      const absl::StatusOr<bool> all_finite = average(discriminator_->parameters(), finite);
+      if (!all_finite.ok()) return all_finite.status();
+      if (!*all_finite) {
+        ++stats->skipped_updates;
+        continue;
+      }
+    }
     discriminator_optimizer_->step();
     loss_sum += loss.total.item<double>();
     expert_logit += loss.expert_logit_mean.item<double>();
@@ -176,6 +199,7 @@ void Trainer::UpdateDiscriminator(const TrainingBatch& batch, const torch::Tenso
   stats->expert_logit = expert_logit / epochs;
   stats->policy_logit = policy_logit / epochs;
   stats->gradient_penalty = penalty / epochs;
+  return absl::OkStatus();
 }
 
 }  // namespace modskill::learner

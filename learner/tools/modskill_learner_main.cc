@@ -111,6 +111,15 @@ ABSL_FLAG(std::vector<std::string>, clips, {}, "--eval: clips to evaluate (defau
 ABSL_FLAG(std::string, eval_out, "", "--eval: directory for eval.json and eval.md (default: the checkpoint's)");
 ABSL_FLAG(bool, baseline, false,
           "--eval: evaluate the open-loop reference (PD targets = the reference pose) instead of --checkpoint");
+ABSL_FLAG(int, world_size, 1,
+          "data-parallel learners: how many learners train one policy together, each on its own --servers "
+          "(gradients averaged every minibatch); 1: this learner alone");
+ABSL_FLAG(int, rank, 0, "data-parallel learners: this learner's rank in [0, --world_size); rank 0 writes the run");
+ABSL_FLAG(std::string, rendezvous, "",
+          "data-parallel learners: rank 0's host:port (rank 0 listens on the port, every rank connects)");
+ABSL_FLAG(double, rendezvous_timeout_s, 60, "data-parallel learners: how long ranks wait for each other at startup");
+ABSL_FLAG(double, collective_timeout_s, 300,
+          "data-parallel learners: how long a rank waits in one collective for the others before it stops");
 ABSL_FLAG(std::vector<std::string>, milestones, {},
           "env step counts (e.g. 1e6,5e6) at which the policy is also exported as policy_at_<N>M.pt");
 
@@ -363,6 +372,11 @@ absl::StatusOr<TrainerConfig> ConfigFromFlags(const std::string& token) {
   config->report_every = absl::GetFlag(FLAGS_report_every);
   config->resume = absl::GetFlag(FLAGS_resume);
   config->server_timeout_s = absl::GetFlag(FLAGS_server_timeout_s);
+  config->data_parallel.world_size = absl::GetFlag(FLAGS_world_size);
+  config->data_parallel.rank = absl::GetFlag(FLAGS_rank);
+  config->data_parallel.rendezvous = absl::GetFlag(FLAGS_rendezvous);
+  config->data_parallel.rendezvous_timeout_s = absl::GetFlag(FLAGS_rendezvous_timeout_s);
+  config->data_parallel.collective_timeout_s = absl::GetFlag(FLAGS_collective_timeout_s);
   if (absl::Status status = config->Validate(); !status.ok()) return status;
   return config;
 }
@@ -387,6 +401,7 @@ std::vector<std::string> ProgressColumns(const Trainer& trainer) {
     columns.push_back(column);
   }
   if (!IsTrackingTask(trainer.config().task)) columns.push_back("normalized_return");
+  if (trainer.config().data_parallel.world_size > 1) columns.insert(columns.end(), {"allreduce_s", "allreduce_bytes"});
   return columns;
 }
 
@@ -400,6 +415,7 @@ std::vector<double> ProgressRow(const IterationStats& s, double elapsed, const T
                          s.termination_distance, s.tracked_share, s.collect_seconds, s.update_seconds,
                          double(s.policy_lag)});
   if (!IsTrackingTask(trainer.config().task)) row.push_back(s.normalized_return);
+  if (trainer.config().data_parallel.world_size > 1) row.insert(row.end(), {s.allreduce_seconds, double(s.allreduce_bytes)});
   return row;
 }
 
@@ -427,7 +443,8 @@ void PrintIteration(const IterationStats& s, const Trainer& trainer, int last, d
 }
 
 // What follows each iteration: its line, its row in progress.csv and TensorBoard, the time
-// budget, and the policy exports of the milestones it passed.
+// budget, and the policy exports of the milestones it passed (the files on rank 0 only: the other
+// ranks have no `events` and `csv`).
 struct IterationReporter {
   Trainer* trainer;
   TensorBoardWriter* events;
@@ -447,10 +464,11 @@ struct IterationReporter {
     PrintIteration(s, *trainer, last, left);
     const std::vector<std::string> columns = ProgressColumns(*trainer);
     const std::vector<double> row = ProgressRow(s, elapsed, *trainer);
+    if (budget_min > 0 && elapsed >= budget_min * 60) g_stop = true;
+    if (events == nullptr) return;
     for (size_t c = 2; c < columns.size(); ++c) (void)events->AddScalar(columns[c], s.env_steps, row[c]);
     (void)events->Flush();
     (void)csv->Append(row);
-    if (budget_min > 0 && elapsed >= budget_min * 60) g_stop = true;
     ExportMilestones(s);
   }
 
@@ -487,12 +505,18 @@ int RunTraining(const std::string& token) {
   if (!milestones.ok()) return Fail(std::string(milestones.status().message()), 2);
   auto trainer = Trainer::Create(*config);
   if (!trainer.ok()) return Fail(std::string(trainer.status().message()));
-  auto events = TensorBoardWriter::Open(config->run_dir);
-  if (!events.ok()) return Fail(std::string(events.status().message()));
-  auto csv = CsvLogger::Open(config->run_dir + "/progress.csv", ProgressColumns(**trainer));
-  if (!csv.ok()) return Fail(std::string(csv.status().message()));
+  std::unique_ptr<TensorBoardWriter> events;
+  std::unique_ptr<CsvLogger> csv;
+  if ((*trainer)->writes_run_dir()) {  // data-parallel ranks other than 0 write nothing
+    auto opened_events = TensorBoardWriter::Open(config->run_dir);
+    if (!opened_events.ok()) return Fail(std::string(opened_events.status().message()));
+    auto opened_csv = CsvLogger::Open(config->run_dir + "/progress.csv", ProgressColumns(**trainer));
+    if (!opened_csv.ok()) return Fail(std::string(opened_csv.status().message()));
+    events = *std::move(opened_events);
+    csv = *std::move(opened_csv);
+  }
 
-  IterationReporter reporter{trainer->get(), events->get(), csv->get(), &*config, *std::move(milestones)};
+  IterationReporter reporter{trainer->get(), events.get(), csv.get(), &*config, *std::move(milestones)};
   // Milestones a resumed run passed already are skipped.
   while (reporter.next_milestone < reporter.milestones.size() &&
          reporter.milestones[reporter.next_milestone] <= (*trainer)->env_steps()) {
@@ -509,6 +533,7 @@ int RunTraining(const std::string& token) {
           used.action_mode, used.run_dir);
   absl::Status status = (*trainer)->Run([&](const IterationStats& s) { reporter.Report(s); }, &g_stop);
   if (!status.ok()) return Fail(std::string(status.message()));
+  if (!(*trainer)->writes_run_dir()) return 0;
   return SaveFinalState(**trainer, *config);
 }
 
@@ -519,6 +544,7 @@ int main(int argc, char** argv) {
   absl::SetProgramUsageMessage(
       "trains or evaluates a ModSkill policy against modskill simulation servers.\n"
       "  modskill-learner --servers host:port --run_dir DIR --preset small --iterations N\n"
+      "  modskill-learner --world_size 2 --rank 0|1 --rendezvous HOST0:29500 --servers ... --run_dir DIR\n"
       "  modskill-learner --eval --checkpoint DIR/policy.pt --servers host:port\n"
       "  modskill-learner --task steer --skills TRACKER/policy.pt --servers host:port --run_dir DIR\n"
       "  modskill-learner --eval --task steer --checkpoint DIR/policy.pt --servers host:port --task_baselines");
