@@ -10,6 +10,7 @@ PACKAGES=(
   build-essential cmake ccache pkg-config
   libmujoco-dev libqhull-dev libeigen3-dev libabsl-dev zlib1g-dev libzip-dev nlohmann-json3-dev
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler libtorch-dev
+  libgloo-dev  # the Gloo headers c10d's ProcessGroupGloo.hpp includes (data-parallel learners)
   libopenblas0-pthread
   libgtest-dev libgmock-dev
   openssl  # tests/tls_server_test makes a throwaway CA and certificates with it
