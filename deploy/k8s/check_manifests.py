@@ -26,6 +26,8 @@ FLAG_SOURCES = {
     "modskill-client": REPO / "client/cpp/modskill_client_main.cc",
 }
 KNOWN_KINDS = {"Namespace", "Service", "Deployment", "Job", "PersistentVolumeClaim", "ConfigMap", "Secret"}
+# Components checked whether or not kustomization.yaml enables them.
+OPTIONAL_COMPONENTS = ["data-parallel"]
 
 
 class Problems(list):
@@ -67,6 +69,7 @@ def check_files_listed(root, kustomization, components, problems):
     for component_dir, component in components.items():
         listed.add(component_dir / "kustomization.yaml")
         listed |= {component_dir / p["path"] for p in component.get("patches", []) if "path" in p}
+        listed |= {component_dir / r for r in component.get("resources", [])}
     listed.add(root / "kustomization.yaml")
     for path in sorted(root.rglob("*.yaml")):
         if "secrets" not in path.parts and path not in listed:
@@ -78,7 +81,9 @@ def check_files_listed(root, kustomization, components, problems):
 
 def check_service(docs, problems):
     """The headless Service selects the server Deployment's pods; ports agree everywhere."""
-    services, deployments = by_kind(docs, "Service"), by_kind(docs, "Deployment")
+    # The data-parallel component's Service names the learner ranks (check_data_parallel).
+    services = [d for d in by_kind(docs, "Service") if d["metadata"]["name"] != "modskill-learner-ranks"]
+    deployments = by_kind(docs, "Deployment")
     if len(services) != 1 or len(deployments) != 1:
         problems.add("manifests", f"expected one Service and one Deployment, found {len(services)} and {len(deployments)}")
         return None
@@ -208,7 +213,8 @@ def generated_names(kustomization, problems, root):
 def check_sources(root, problems):
     kustomization = yaml.safe_load((root / "kustomization.yaml").read_text())
     components = {}
-    for name in kustomization.get("components", []):
+    names = kustomization.get("components", []) + [n for n in OPTIONAL_COMPONENTS if (root / n).is_dir()]
+    for name in names:
         components[root / name] = yaml.safe_load((root / name / "kustomization.yaml").read_text())
     check_files_listed(root, kustomization, components, problems)
     docs = []
@@ -227,6 +233,8 @@ def check_sources(root, problems):
             problems.add("kustomization.yaml", f"replicas names {entry['name']}, not a Deployment")
     for component_dir, component in components.items():
         check_component_patches(component_dir, component, docs, problems)
+    if root / "data-parallel" in components:
+        check_data_parallel(root / "data-parallel", components[root / "data-parallel"], docs, problems)
     return kustomization
 
 
@@ -250,6 +258,48 @@ def check_component_patches(component_dir, component, docs, problems):
                 value = str(operation.get("value", ""))
                 if value.startswith("--") and value[2:].split("=", 1)[0] not in flags:
                     problems.add(component_dir, f"{value}: {binaries[target]} has no such flag")
+
+
+def check_data_parallel(component_dir, component, docs, problems):
+    """The indexed learner Job: N agrees in completions, parallelism and --world_size; the rank is
+    the completion index; --rendezvous names the index-0 pod in the headless Service's subdomain
+    and the Service's port; the Service selects the learner pods."""
+    where = component_dir.name
+    jobs = by_kind(docs, "Job")
+    patches = [d for p in component.get("patches", []) if "path" in p for d in load_docs(component_dir / p["path"], problems)]
+    job_patch = next((d for d in patches if d.get("kind") == "Job"), None)
+    services = [d for r in component.get("resources", []) for d in load_docs(component_dir / r, problems) if d.get("kind") == "Service"]
+    if len(jobs) != 1 or job_patch is None or len(services) != 1:
+        problems.add(where, "expected the learner Job, one Job patch and one Service")
+        return
+    job, service, spec = jobs[0], services[0], job_patch.get("spec", {})
+    args = [str(o.get("value", "")) for p in component.get("patches", []) if "patch" in p for o in yaml.safe_load(p["patch"])]
+    flags = dict(a[2:].split("=", 1) for a in args if a.startswith("--") and "=" in a)
+    world_size = flags.get("world_size")
+    if spec.get("completionMode") != "Indexed":
+        problems.add(where, "the learner Job must be completionMode: Indexed (rank = completion index)")
+    for field in ("completions", "parallelism"):
+        if str(spec.get(field)) != world_size:
+            problems.add(where, f"{field} {spec.get(field)} differs from --world_size={world_size}")
+    env = {e["name"]: e for c in pod_spec(job_patch).get("containers", []) for e in c.get("env", [])}
+    rank = re.fullmatch(r"\$\((\w+)\)", flags.get("rank", ""))
+    index_path = "metadata.annotations['batch.kubernetes.io/job-completion-index']"
+    if rank is None or env.get(rank.group(1), {}).get("valueFrom", {}).get("fieldRef", {}).get("fieldPath") != index_path:
+        problems.add(where, f"--rank={flags.get('rank')} is not an env var from the pod's completion index")
+    subdomain = pod_spec(job_patch).get("subdomain")
+    if subdomain != service["metadata"]["name"]:
+        problems.add(where, f"the Job's subdomain {subdomain} is not the Service {service['metadata']['name']}")
+    if service["spec"].get("clusterIP") != "None":
+        problems.add(where, "the ranks' Service must be headless (clusterIP: None)")
+    labels = job["spec"]["template"]["metadata"].get("labels", {})
+    for key, value in service["spec"].get("selector", {}).items():
+        if labels.get(key) != value:
+            problems.add(where, f"Service selector {key}={value} matches no label of the learner pods")
+    ports = [p["port"] for p in service["spec"].get("ports", [])]
+    expected = f"{job['metadata']['name']}-0.{service['metadata']['name']}.$(POD_NAMESPACE).svc.cluster.local"
+    host, _, port = flags.get("rendezvous", "").rpartition(":")
+    if host != expected or not port.isdigit() or int(port) not in ports:
+        problems.add(where, f"--rendezvous={flags.get('rendezvous')}, expected {expected}:PORT with PORT in the Service's {ports}")
 
 
 def check_rendered(path, kustomization, problems):

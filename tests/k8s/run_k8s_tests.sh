@@ -41,6 +41,18 @@ check() {
   expect_failure image server-deployment.yaml 's/image: modskill /image: debian:12 /' "image debian:12, expected modskill"
   expect_failure probe tls/server-tls.yaml 's/--tls_server_name/--server_name/' "modskill-client has no --server_name"
   expect_failure listed kustomization.yaml '/- learner-job.yaml/d' "learner-job.yaml: not listed in the kustomization"
+  # The data-parallel component (checked whether or not it is enabled), and enabled.
+  expect_failure ranks data-parallel/learner-ranks-job.yaml 's/completions: 2/completions: 3/' \
+    "completions 3 differs from --world_size=2"
+  expect_failure subdomain data-parallel/learner-ranks-job.yaml 's/subdomain: modskill-learner-ranks/subdomain: other/' \
+    "the Job's subdomain other is not the Service modskill-learner-ranks"
+  expect_failure rendezvous data-parallel/kustomization.yaml 's/modskill-learner-0\./modskill-learner-1./' \
+    "--rendezvous=modskill-learner-1."
+  expect_failure rank_flag data-parallel/kustomization.yaml 's/--rank=/--rank_index=/' '--rank_index=$(MODSKILL_RANK): modskill-learner has no such flag'
+  cp -r "$REPO/deploy/k8s" "$WORK/ranks_enabled"
+  sed -i 's/^  - tls$/  - tls\n  - data-parallel/' "$WORK/ranks_enabled/kustomization.yaml"
+  grep -q -- "- data-parallel" "$WORK/ranks_enabled/kustomization.yaml" || { echo "FAIL: could not enable data-parallel"; exit 1; }
+  /usr/bin/python3 "$CHECK" "$WORK/ranks_enabled"
 }
 
 # Throwaway secrets where the kustomization expects them (deploy/k8s/secrets/, never committed).
@@ -82,7 +94,14 @@ PY
   /usr/bin/python3 "$CHECK" "$WORK/plain" --rendered "$WORK/plain.yaml"
   grep -q "grpc:" "$WORK/plain.yaml" || { echo "FAIL: the plain-text rendering has no native gRPC probe"; exit 1; }
   if grep -q "tls" "$WORK/plain.yaml"; then echo "FAIL: the plain-text rendering mentions tls"; exit 1; fi
-  echo "k8s render test: both variants render and check"
+  # The data-parallel variant: an indexed learner Job and the ranks' Service.
+  cp -r "$WORK/tls" "$WORK/ranks"
+  sed -i 's/^  - tls$/  - tls\n  - data-parallel/' "$WORK/ranks/kustomization.yaml"
+  kubectl kustomize "$WORK/ranks" > "$WORK/ranks.yaml"
+  /usr/bin/python3 "$CHECK" "$WORK/ranks" --rendered "$WORK/ranks.yaml"
+  grep -q "completionMode: Indexed" "$WORK/ranks.yaml" || { echo "FAIL: no indexed Job in the data-parallel rendering"; exit 1; }
+  grep -q -- "--rank=\$(MODSKILL_RANK)" "$WORK/ranks.yaml" || { echo "FAIL: no --rank in the data-parallel rendering"; exit 1; }
+  echo "k8s render test: the three variants render and check"
 }
 
 case "${1:-}" in
