@@ -11,4 +11,4 @@ target_include_directories(modskill_learner_algo PUBLIC ${CMAKE_SOURCE_DIR})
 target_link_libraries(modskill_learner_algo PUBLIC modskill_common modskill_tensorboard_proto
   ${TORCH_LIBRARIES} absl::status absl::statusor absl::strings absl::str_format)
 target_compile_options(modskill_learner_algo PRIVATE ${TORCH_CXX_FLAGS} -Wall -Wextra -Wno-unused-parameter)
-target_precompile_headers(modskill_learner_algo PRIVATE <torch/torch.h>)
+modskill_torch_pch(modskill_learner_algo)
