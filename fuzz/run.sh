@@ -25,8 +25,11 @@ if ! command -v clang++ >/dev/null ||
   echo "fuzz/run.sh: clang++ with libFuzzer is missing (apt-get install clang libfuzzer-14-dev)" >&2
   exit 77
 fi
+# MODSKILL_UNITY_BUILD=ON (.ci/run): a unity build, as in deploy/setup.sh.
+unity=()
+if [[ -n "${MODSKILL_UNITY_BUILD:-}" ]]; then unity=(-DCMAKE_UNITY_BUILD="${MODSKILL_UNITY_BUILD}"); fi
 CC=clang CXX=clang++ cmake -S "${repo}" -B "${build}" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DMODSKILL_FUZZ=ON \
-  -DMODSKILL_BUILD_TESTS=OFF -DMODSKILL_BUILD_BENCH=OFF >/dev/null
+  -DMODSKILL_BUILD_TESTS=OFF -DMODSKILL_BUILD_BENCH=OFF "${unity[@]}" >/dev/null
 cmake --build "${build}" -j"${jobs}" --target "${targets[@]/%/_fuzzer}"
 
 mkdir -p "${build}/artifacts"
