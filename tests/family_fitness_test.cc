@@ -1,6 +1,6 @@
-// The episode fitness F (learner/family/fitness.h): hand-computed terms, the drag threshold V,
+// The episode fitness F (common/policy/family_fitness.h): hand-computed terms, the drag threshold V,
 // and refusals.
-#include "learner/family/fitness.h"
+#include "common/policy/family_fitness.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -8,7 +8,7 @@
 #include <cmath>
 #include <vector>
 
-namespace modskill::learner::family {
+namespace modskill {
 namespace {
 
 TEST(FamilyFitnessTest, PerfectEpisodeIsOnePlusTheConstraint) {
@@ -60,4 +60,4 @@ TEST(FamilyFitnessTest, RefusesBadMeasurements) {
 }
 
 }  // namespace
-}  // namespace modskill::learner::family
+}  // namespace modskill

@@ -181,8 +181,19 @@ absl::Status SimulationStream::SendActions(const float* actions) {
   tensor->mutable_data()->assign(reinterpret_cast<const char*>(actions),
                                  sizeof(float) * static_cast<size_t>(num_envs_) * action_size_);
   last_request_bytes_ = request_.ByteSizeLong();
-  if (!stream_->Write(request_)) return Fail("Simulate");
+  const bool written = stream_->Write(request_);
+  request_.clear_family_params();  // sent once; the server keeps them
+  if (!written) return Fail("Simulate");
   return absl::OkStatus();
+}
+
+void SimulationStream::SetFamilyParameters(const std::vector<float>& rows) {
+  v1::Tensor* tensor = request_.mutable_family_params();
+  tensor->clear_shape();
+  tensor->add_shape(num_envs_);
+  tensor->add_shape(spec().family_size());
+  tensor->set_dtype(v1::FLOAT32);
+  tensor->mutable_data()->assign(reinterpret_cast<const char*>(rows.data()), sizeof(float) * rows.size());
 }
 
 absl::Status SimulationStream::ReceiveResult() {

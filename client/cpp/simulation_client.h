@@ -42,6 +42,10 @@ class SimulationStream {
   // From the next SendActions on, asks the server for this termination distance (m); 0 keeps the
   // session's own. A curriculum calls it between steps.
   void SetTerminationDistance(float distance) { request_.set_termination_distance(distance); }
+  // Family sessions: the next SendActions also sends these parameters, [num_envs,
+  // len(spec().family())], for each env's episodes from its next reset on (then they are sent
+  // no more: the server keeps them).
+  void SetFamilyParameters(const std::vector<float>& rows);
   absl::Status ReceiveResult();
   const v1::StepResult& result() const { return response_.step(); }
   // The name of a clip id of this session (StepResult.clip_id, ended_clip_id), following the

@@ -18,6 +18,7 @@ StepResultWidths WidthsOf(const v1::EnvSpec& spec) {
   widths.amp_obs = kAnySize;
   widths.reward_terms = spec.reward_terms_size();
   widths.parts = spec.parts_size();
+  widths.family_params = spec.family_size();
   return widths;
 }
 
@@ -38,13 +39,16 @@ absl::Status CheckAmpFrames(const v1::StepResult& result, const v1::EnvSpec& spe
 
 absl::Status CheckStepResult(const v1::StepResult& result, int num_envs, const v1::EnvSpec& spec) {
   const StepResultWidths widths = WidthsOf(spec);
-  // A field that may be absent is checked when it is there (an empty optional one counts as absent).
+  // A field that may be absent is checked when it is there (an empty optional one counts as absent);
+  // a family session must send the family's fields, other sessions' are not looked at.
 #define MODSKILL_CHECK_FIELD(name, type, dtype, width, initial, presence)                                  \
   {                                                                                                        \
-    const bool present = StepResultPresence::presence == StepResultPresence::kAlways ||                    \
-                         (result.has_##name() &&                                                           \
-                          (StepResultPresence::presence != StepResultPresence::kOptional ||                \
-                           result.name().shape_size() > 0));                                               \
+    constexpr StepResultPresence kPresence = StepResultPresence::presence;                                 \
+    const bool present = kPresence == StepResultPresence::kAlways ||                                       \
+                         (kPresence == StepResultPresence::kFamily                                         \
+                              ? widths.family_params > 0                                                   \
+                              : result.has_##name() && (kPresence != StepResultPresence::kOptional ||      \
+                                                        result.name().shape_size() > 0));                  \
     if (present) {                                                                                         \
       if (absl::Status status = CheckField(result.name(), #name, v1::dtype, num_envs, widths.width);       \
           !status.ok()) {                                                                                  \

@@ -7,7 +7,8 @@
 // name is the proto field and the BatchBuffers member; width is a StepResultWidths member
 // (`vector` for a row of one value, shape [N]; otherwise [N, width]); presence says when the
 // field is on the wire: kAlways, kWhenRequested (amp_obs: the session's AmpObsMode may thin it
-// to the newest frame or omit it) or kOptional (a server may leave it out).
+// to the newest frame or omit it), kOptional (a server may leave it out) or kFamily (sent in
+// motor-skill family sessions only, where widths.family_params > 0).
 #ifndef MODSKILL_COMMON_WIRE_STEP_RESULT_FIELDS_H_
 #define MODSKILL_COMMON_WIRE_STEP_RESULT_FIELDS_H_
 
@@ -26,11 +27,16 @@
   X(ended_frame, int32_t, INT32, vector, -1, kAlways)                                                         \
   X(max_body_error, float, FLOAT32, vector, 0, kAlways)          /* m, before any reset */                    \
   X(mean_body_error, float, FLOAT32, vector, 0, kAlways)         /* m */                                      \
-  X(part_error, float, FLOAT32, parts, 0, kOptional)             /* m per part, layout order */
+  X(part_error, float, FLOAT32, parts, 0, kOptional)             /* m per part, layout order */              \
+  X(family_params, float, FLOAT32, family_params, 0, kFamily)    /* a of the row's episode */               \
+  X(ended_family_params, float, FLOAT32, family_params, 0, kFamily) /* valid where done */                  \
+  X(phase_step, float, FLOAT32, vector, 0, kFamily)              /* frames the phase advanced */            \
+  X(spike_reward, float, FLOAT32, vector, 0, kFamily)            /* one-off part of reward */               \
+  X(fitness, float, FLOAT32, vector, 0, kFamily)                 /* F of the ended episode */
 
 namespace modskill {
 
-enum class StepResultPresence { kAlways, kWhenRequested, kOptional };
+enum class StepResultPresence { kAlways, kWhenRequested, kOptional, kFamily };
 
 // The widths of a session's per-env fields; `vector` marks a field of one value per env.
 struct StepResultWidths {
@@ -40,6 +46,7 @@ struct StepResultWidths {
   int64_t amp_obs = 0;
   int64_t reward_terms = 0;
   int64_t parts = 0;
+  int64_t family_params = 0;  // 0 outside a family session
 };
 
 }  // namespace modskill

@@ -24,7 +24,7 @@ struct EliteSetConfig {
 
 struct Elite {
   std::vector<double> params;  // a, normalized to [0, 1] per dimension (common/policy/family_parameters.h)
-  double fitness = 0;          // F (fitness.h)
+  double fitness = 0;          // F (common/policy/family_fitness.h)
   torch::Tensor trajectory;    // [L, D]: (d_t, tau_t) at each of the clip's L frames
 };
 

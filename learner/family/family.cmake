@@ -3,7 +3,6 @@
 # elites' bootstrap, the parameterization network and the parameter curriculum.
 add_library(modskill_learner_family STATIC
   ${CMAKE_CURRENT_LIST_DIR}/variable_step_gae.cc
-  ${CMAKE_CURRENT_LIST_DIR}/fitness.cc
   ${CMAKE_CURRENT_LIST_DIR}/kd_tree.cc
   ${CMAKE_CURRENT_LIST_DIR}/elite_set.cc
   ${CMAKE_CURRENT_LIST_DIR}/elite_bootstrap.cc
@@ -15,3 +14,18 @@ target_link_libraries(modskill_learner_family PUBLIC modskill_family_parameters 
   absl::statusor absl::strings absl::span)
 target_compile_options(modskill_learner_family PRIVATE ${TORCH_CXX_FLAGS} -Wall -Wextra -Wno-unused-parameter)
 target_precompile_headers(modskill_learner_family PRIVATE <torch/torch.h>)
+
+# modskill_learner_family_trainer: a family trained against a server's family session: its policy
+# and critic, the coverage of its elites, and the trainer (modskill-learner --family).
+add_library(modskill_learner_family_trainer STATIC
+  ${CMAKE_CURRENT_LIST_DIR}/family_policy.cc
+  ${CMAKE_CURRENT_LIST_DIR}/family_coverage.cc
+  ${CMAKE_CURRENT_LIST_DIR}/family_trainer.cc
+  ${CMAKE_CURRENT_LIST_DIR}/family_trainer_collect.cc
+  ${CMAKE_CURRENT_LIST_DIR}/family_trainer_update.cc
+  ${CMAKE_CURRENT_LIST_DIR}/family_trainer_checkpoint.cc
+  ${CMAKE_CURRENT_LIST_DIR}/family_trainer_evaluate.cc)
+target_link_libraries(modskill_learner_family_trainer PUBLIC modskill_learner_family modskill_learner_algo
+  modskill_learner_nn modskill_client)
+target_compile_options(modskill_learner_family_trainer PRIVATE ${TORCH_CXX_FLAGS} -Wall -Wextra -Wno-unused-parameter)
+modskill_torch_pch(modskill_learner_family_trainer)

@@ -39,6 +39,7 @@
 #include "learner/skill_library.h"
 #include "learner/task_evaluation.h"
 #include "learner/tensorboard_writer.h"
+#include "learner/tools/family_command.h"
 #include "learner/trainer.h"
 
 ABSL_FLAG(std::vector<std::string>, servers, {},
@@ -547,7 +548,10 @@ int main(int argc, char** argv) {
       "  modskill-learner --world_size 2 --rank 0|1 --rendezvous HOST0:29500 --servers ... --run_dir DIR\n"
       "  modskill-learner --eval --checkpoint DIR/policy.pt --servers host:port\n"
       "  modskill-learner --task steer --skills TRACKER/policy.pt --servers host:port --run_dir DIR\n"
-      "  modskill-learner --eval --task steer --checkpoint DIR/policy.pt --servers host:port --task_baselines");
+      "  modskill-learner --eval --task steer --checkpoint DIR/policy.pt --servers host:port --task_baselines\n"
+      "  modskill-learner --family deepmimic_jump --param gravity=4:14 --servers host:port --run_dir DIR");
+  // --param may come several times, which absl alone would reduce to the last.
+  const std::vector<std::string> family_params = modskill::learner::RepeatedFlagValues(argc, argv, "param");
   absl::ParseCommandLine(argc, argv);
   using namespace modskill::learner;
   signal(SIGINT, OnSignal);
@@ -559,6 +563,7 @@ int main(int argc, char** argv) {
     if (!read.ok()) return Fail(absl::StrCat("--auth_token_file: ", read.status().message()), 2);
     token = *read;
   }
+  if (FamilyRequested()) return RunFamilyTraining(token, family_params, g_stop);
   if (!absl::GetFlag(FLAGS_eval)) return RunTraining(token);
   return absl::GetFlag(FLAGS_task) == "tracking" ? RunEvaluation(token) : RunTaskEvaluation(token);
 }

@@ -6,6 +6,7 @@
 
 #include "common/viewer/viewer_wire.h"
 #include "common/wire/tensor_codec.h"
+#include "server/core/env/family_episode.h"
 #include "server/core/motion/clip_view.h"
 
 namespace modskill {
@@ -52,6 +53,21 @@ void ToProto(const EnvSpec& spec, const HumanoidModel& humanoid, v1::EnvSpec* ou
     out->add_action_scale(static_cast<float>(humanoid.action_scale()[hinge]));
   }
   for (const ViewerBody& body : ViewerBodiesFromSpec(humanoid.spec())) ToWire(body, out->add_body_geometry());
+  for (const FamilyParameterInfo& parameter : OfferedFamilyParameters()) {
+    v1::FamilyParameterInfo* info = out->add_family_parameters();
+    info->set_name(parameter.name);
+    info->set_unit(parameter.unit);
+    info->set_description(parameter.description);
+    info->set_min_value(parameter.min_value);
+    info->set_min_exclusive(parameter.min_exclusive);
+  }
+  for (const ParamRange& range : spec.family) {
+    v1::FamilyParameterRange* wire = out->add_family();
+    wire->set_name(range.name);
+    wire->set_lo(range.lo);
+    wire->set_hi(range.hi);
+  }
+  out->set_time_warp_action(spec.time_warp_action);
 }
 
 void ToProto(const MotionClip& clip, v1::MotionInfo* out) {
@@ -145,12 +161,13 @@ void FillStepResult(const EnvBatch& batch, int64_t step, int amp_frames, v1::Ste
   const BatchBuffers& b = batch.buffers();
   const int64_t n = batch.num_envs();
   out->set_step(step);
-  // Every field of the table, amp_obs in the form the session asked for.
-#define MODSKILL_ENCODE_FIELD(name, type, dtype, width, initial, presence)       \
-  if (StepResultPresence::presence == StepResultPresence::kWhenRequested) {     \
-    EncodeAmpObs(b, batch.spec(), amp_frames, out);                             \
-  } else {                                                                      \
-    EncodeRows(b.name, n, b.widths.width, out->mutable_##name());               \
+  // Every field of the table, amp_obs in the form the session asked for, the family's fields in
+  // family sessions only.
+#define MODSKILL_ENCODE_FIELD(name, type, dtype, width, initial, presence)                      \
+  if (StepResultPresence::presence == StepResultPresence::kWhenRequested) {                    \
+    EncodeAmpObs(b, batch.spec(), amp_frames, out);                                            \
+  } else if (StepResultPresence::presence != StepResultPresence::kFamily || b.widths.family_params > 0) { \
+    EncodeRows(b.name, n, b.widths.width, out->mutable_##name());                              \
   }
   MODSKILL_STEP_RESULT_FIELDS(MODSKILL_ENCODE_FIELD)
 #undef MODSKILL_ENCODE_FIELD

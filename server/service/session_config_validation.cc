@@ -5,6 +5,7 @@
 #include "common/wire/policy_enums.h"
 #include "server/core/env/env_batch.h"
 #include "server/core/env/env_spec.h"
+#include "server/core/env/family_episode.h"
 
 namespace modskill {
 
@@ -58,6 +59,26 @@ absl::StatusOr<TaskSettings> ToTaskSettings(const v1::TaskSettings& wire) {
   return settings;
 }
 
+absl::StatusOr<std::vector<ParamRange>> ToFamilyRanges(const v1::SessionConfig& config, ActionMode action_mode,
+                                                       TaskKind task) {
+  std::vector<ParamRange> ranges;
+  if (!config.has_family() || config.family().params_size() == 0) return ranges;
+  for (const v1::FamilyParameterRange& wire : config.family().params()) {
+    ranges.push_back(ParamRange{wire.name(), wire.lo(), wire.hi()});
+  }
+  if (absl::Status status = ValidateFamilyRanges(ranges, "family.params"); !status.ok()) return status;
+  if (config.motions_size() != 1) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("family: needs exactly one clip in motions, got ", config.motions_size()));
+  }
+  if (task != TaskKind::kTracking) return absl::InvalidArgumentError("family: a family session's task is tracking");
+  if (action_mode != ActionMode::kResidual) {
+    return absl::InvalidArgumentError("family: action_mode must be RESIDUAL (a displacement of the reference)");
+  }
+  if (config.loop_clips()) return absl::InvalidArgumentError("family: loop_clips is not for a family session");
+  return ranges;
+}
+
 absl::StatusOr<SessionSettings> ParseSessionConfig(const v1::SessionConfig& config, int max_envs_per_session,
                                                    int max_library_clips, const PartLayoutCatalog& layouts) {
   SessionSettings settings;
@@ -75,7 +96,11 @@ absl::StatusOr<SessionSettings> ParseSessionConfig(const v1::SessionConfig& conf
   if (!termination.ok()) return termination.status();
   auto distance = ToTerminationDistance(config.termination_distance(), *termination);
   if (!distance.ok()) return distance.status();
-  auto action_mapping = ToActionMapping(config.action_mode(), config.residual_scale());
+  const bool family = config.has_family() && config.family().params_size() > 0;
+  // A family's action is a displacement of its reference: residual, whether asked or left unset.
+  const v1::ActionMode action_mode =
+      family && config.action_mode() == v1::ACTION_MODE_UNSPECIFIED ? v1::RESIDUAL : config.action_mode();
+  auto action_mapping = ToActionMapping(action_mode, config.residual_scale());
   if (!action_mapping.ok()) return action_mapping.status();
   auto termination_bodies = TerminationBodiesFromWire(config.termination_bodies());
   if (!termination_bodies.ok()) return termination_bodies.status();
@@ -88,6 +113,8 @@ absl::StatusOr<SessionSettings> ParseSessionConfig(const v1::SessionConfig& conf
     return absl::InvalidArgumentError(absl::StrCat("loop_clips: tracking only; task ", TaskInfoOf(*task).name,
                                                    " has its own episode ends"));
   }
+  auto family_ranges = ToFamilyRanges(config, action_mapping->mode, *task);
+  if (!family_ranges.ok()) return family_ranges.status();
   settings.amp_frames = config.amp_obs() == v1::NEWEST ? 1 : config.amp_obs() == v1::OMIT ? 0 : kAmpHistory;
   if (config.motions_size() > max_library_clips) {
     return absl::InvalidArgumentError(absl::StrCat("motions: ", config.motions_size(),
@@ -106,6 +133,11 @@ absl::StatusOr<SessionSettings> ParseSessionConfig(const v1::SessionConfig& conf
   settings.env.task = *task;
   settings.env.task_settings = *task_settings;
   settings.env.loop_clips = config.loop_clips();
+  settings.env.family = *std::move(family_ranges);
+  // A family leaves its clip by design (a higher jump, another gravity): a loose default.
+  if (family && config.termination_distance() == 0 && *termination == TerminationMode::kTraining) {
+    settings.env.termination_distance = kFamilyDefaultTerminationDistance;
+  }
   return settings;
 }
 

@@ -42,6 +42,11 @@ absl::StatusOr<TerminationMode> ToTermination(v1::TerminationMode mode, v1::Term
 absl::StatusOr<double> ToTerminationDistance(float distance, TerminationMode mode);
 // 0 in a field means its default; then TaskSettings::Validate.
 absl::StatusOr<TaskSettings> ToTaskSettings(const v1::TaskSettings& wire);
+// A family session's ranges (empty when SessionConfig.family is unset): offered parameters, valid
+// ranges, one clip, task tracking, residual actions, no loop_clips; INVALID_ARGUMENT naming the
+// field otherwise.
+absl::StatusOr<std::vector<ParamRange>> ToFamilyRanges(const v1::SessionConfig& config, ActionMode action_mode,
+                                                       TaskKind task);
 // residual_scale must be 0 outside RESIDUAL; 0 in RESIDUAL means the default scale.
 absl::StatusOr<ActionMapping> ToActionMapping(v1::ActionMode mode, float residual_scale);
 

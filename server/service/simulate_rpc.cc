@@ -19,6 +19,7 @@ namespace modskill {
 // Buffers one session's step loop reuses from message to message.
 struct SimulationService::StepScratch {
   std::vector<float> actions;
+  std::vector<float> family_params;
   std::vector<double> clip_weights;  // swapped with the session's pending weights
   std::optional<PendingMotionSet> motion_set;
   std::vector<std::string> part_names;
@@ -138,6 +139,15 @@ absl::Status SimulationService::StepSession(SimulationSession& session, const v1
   }
   if (request.termination_distance() != 0 && request.termination_distance() != envs.env_config().termination_distance) {
     if (absl::Status status = envs.SetTerminationDistance(request.termination_distance()); !status.ok()) return status;
+  }
+  if (request.has_family_params()) {
+    const int64_t dims = static_cast<int64_t>(envs.spec().family.size());
+    if (dims == 0) return absl::FailedPreconditionError("family_params: the session is not a family session");
+    if (absl::Status status = ReadFloatTensor(request.family_params(), "family_params", {n, dims}, &scratch.family_params);
+        !status.ok()) {
+      return status;
+    }
+    if (absl::Status status = envs.SetFamilyParameters(scratch.family_params); !status.ok()) return status;
   }
   // New sampling weights (ReportFailures) and clips (generation rounds) take effect here,
   // between two steps: this thread alone steps the batch, so no env is drawing a clip meanwhile.

@@ -147,6 +147,11 @@ grpc::Status SimulationService::ReportFailures(grpc::ServerContext* context, con
   if (session == nullptr) {
     return Error(grpc::StatusCode::NOT_FOUND, absl::StrCat("session_id: no open session '", ShownValue(request->session_id()), "'"));
   }
+  if (!session->batch->spec().family.empty()) {
+    // A family keeps its one clip: there is nothing to resample or vary.
+    return Error(grpc::StatusCode::FAILED_PRECONDITION,
+                 absl::StrCat("session_id: '", session->id, "' is a family session, which takes no failure reports"));
+  }
   std::vector<NamedClipReport> reports;
   reports.reserve(request->failures_size());
   for (const v1::ClipFailure& failure : request->failures()) {

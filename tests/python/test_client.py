@@ -155,6 +155,39 @@ class ClientTest(unittest.TestCase):
         self.assertEqual(caught.exception.code, grpc.StatusCode.INVALID_ARGUMENT)
         self.assertIn("loop_clips", caught.exception.message)
 
+    def test_family_session_varies_gravity_per_env(self):
+        self.assertIn("gravity", self.client.describe().family_parameters)
+        with self.client.session(2, seed=1, motions=["deepmimic_jump"], family={"gravity": (4, 14), "jump_height": 1.1}
+                                 ) as session:
+            spec = session.spec
+            self.assertEqual(spec.family, {"gravity": (4.0, 14.0), "jump_height": (1.1, 1.1)})
+            self.assertEqual(spec.time_warp_action, spec.action_size - 1)
+            self.assertEqual(session.initial.family_params.shape, (2, 2))
+            actions = np.zeros((2, spec.action_size), np.float32)
+            actions[:, spec.time_warp_action] = -1.0  # slower than the clip: exp(-1.5) frames a step
+            result = session.step(actions, family_params=np.array([[4, 1.1], [14, 1.1]], np.float32))
+            np.testing.assert_allclose(result.phase_step, np.exp(-1.5), rtol=1e-5)
+            self.assertEqual(result.spike_reward.shape, (2,))
+            ended = np.zeros(2, bool)
+            for _ in range(300):
+                result = session.step(np.zeros((2, spec.action_size), np.float32))
+                for i in np.flatnonzero(result.done):
+                    self.assertGreater(result.fitness[i], 0.0)
+                ended |= result.done
+                if ended.all():
+                    break
+            self.assertTrue(ended.all())
+            # Each env's new episode runs on the parameters it was given.
+            np.testing.assert_allclose(result.family_params, [[4, 1.1], [14, 1.1]], rtol=1e-6)
+            with self.assertRaises(modskill.ServerError) as caught:
+                session.step(actions, family_params=np.array([[20, 1.1], [5, 1.1]], np.float32))
+            self.assertEqual(caught.exception.code, grpc.StatusCode.INVALID_ARGUMENT)
+            self.assertIn("gravity", caught.exception.message)
+        with self.assertRaises(modskill.ServerError) as caught:
+            self.client.session(1, motions=["deepmimic_jump"], family={"no_such_param": (0, 1)})
+        self.assertEqual(caught.exception.code, grpc.StatusCode.INVALID_ARGUMENT)
+        self.assertIn("no_such_param", caught.exception.message)
+
     def test_describe_other_layout_and_unknown_layout(self):
         spec = self.client.describe("3part")
         self.assertEqual(spec.part_layout, "3part")

@@ -25,7 +25,7 @@ import os
 import queue
 import threading
 import weakref
-from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Union
+from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
 
 import grpc
 import numpy as np
@@ -341,9 +341,10 @@ class Client:
     def session(self, num_envs: int, seed: int = 0, part_layout: str = "", motions: Sequence[str] = (),
                 termination: Union[str, int] = "training", amp_obs: Union[str, int] = "full", *,
                 termination_distance: float = 0.0, max_episode_steps: int = 0,
-                action_mode: Union[str, int] = "absolute", residual_scale: float = 0.0,
+                action_mode: Optional[Union[str, int]] = None, residual_scale: float = 0.0,
                 termination_bodies: Union[str, int] = "all", task: str = "",
-                task_settings: Optional[Mapping[str, float]] = None, loop_clips: bool = False) -> "Session":
+                task_settings: Optional[Mapping[str, float]] = None, loop_clips: bool = False,
+                family: Optional[Mapping[str, Union[float, Tuple[float, float]]]] = None) -> "Session":
         """Opens a simulation session of ``num_envs`` envs and returns it once the server has
         reset them (``Session.initial`` holds the first observations).
 
@@ -359,6 +360,7 @@ class Client:
           max_episode_steps: 0: until the clip ends.
           action_mode: "absolute" (PD target = offset + scale * a) or "residual" (the reference
             pose of the next frame + residual_scale * scale * a: zero actions track open loop).
+            Default: "residual" in a family session, "absolute" otherwise.
           residual_scale: residual mode only; 0: the server's default (0.5).
           termination_bodies: "all" or "no_feet" (training termination ignores ankles and toes).
           task: "" or "tracking", or a task env ``describe().tasks`` lists ("steer", "reach",
@@ -367,11 +369,18 @@ class Client:
             "max_goal_interval_s": 5}; a missing key keeps the server's default.
           loop_clips: tracking only: a clip's end does not end the episode; the reference goes on
             at frame 1, moved by the clip's own displacement, until max_episode_steps (0: 300).
+          family: a motor-skill family over the session's one clip (Lee et al. 2021), e.g.
+            {"gravity": (4, 14), "jump_height": 1.2}: each parameter's range (lo, hi) or a value (a
+            constraint); ``describe().family_parameters`` lists them. Actions are residual
+            displacements plus a time warp at ``spec.time_warp_action``; ``step(family_params=)``
+            picks each env's next parameters.
 
         Use it as a context manager (or call ``close()``) so that the server frees the envs.
         """
         if isinstance(motions, str):
             motions = [motions]
+        if action_mode is None:
+            action_mode = "residual" if family else "absolute"
         config = pb.SessionConfig(num_envs=int(num_envs), seed=int(seed), part_layout=part_layout,
                                   motions=list(motions), termination=_enum(termination, _TERMINATION, "termination"),
                                   termination_distance=termination_distance,
@@ -382,10 +391,19 @@ class Client:
                                   termination_bodies=_enum(termination_bodies, _TERMINATION_BODIES,
                                                            "termination_bodies"),
                                   task=task, task_settings=pb.TaskSettings(**dict(task_settings or {})),
-                                  loop_clips=bool(loop_clips))
+                                  loop_clips=bool(loop_clips), family=_family_config(family))
         session = Session(self, config)
         self._sessions.add(session)
         return session
+
+
+def _family_config(family: Optional[Mapping[str, Union[float, Tuple[float, float]]]]) -> pb.FamilyConfig:
+    """{"gravity": (4, 14), "jump_height": 1.2} -> FamilyConfig (a single value is lo = hi)."""
+    config = pb.FamilyConfig()
+    for name, value in (family or {}).items():
+        lo, hi = (value, value) if np.isscalar(value) else tuple(value)
+        config.params.add(name=str(name), lo=float(lo), hi=float(hi))
+    return config
 
 
 _END = object()  # ends the request stream
@@ -462,10 +480,13 @@ class Session:
             raise ValueError(f"actions: non-finite value {actions[row, col]} at [{row}, {col}]")
         return actions
 
-    def step(self, actions: np.ndarray, termination_distance: float = 0.0) -> StepResult:
+    def step(self, actions: np.ndarray, termination_distance: float = 0.0,
+             family_params: Optional[np.ndarray] = None) -> StepResult:
         """Sends a batch of actions (float [num_envs, action_size], clipped to [-1, 1] by the
         server) and returns the resulting :class:`StepResult`. A termination_distance > 0 (m)
-        becomes the session's from this step on (a curriculum); 0 keeps it."""
+        becomes the session's from this step on (a curriculum); 0 keeps it. In a family session,
+        family_params (float [num_envs, len(spec.family)], each inside its range) are the
+        parameters of each env's episodes from its next reset on."""
         actions = self.check_actions(actions)
         with self._lock:
             if self._closed:
@@ -473,6 +494,8 @@ class Session:
                                    + (f" after an error ({self._error})" if self._error else ""))
             request = pb.SimulateRequest(termination_distance=termination_distance)
             tensors.encode(actions, request.actions)
+            if family_params is not None:
+                tensors.encode(np.ascontiguousarray(family_params, dtype=np.float32), request.family_params)
             self._requests.put(request)
             step = self._receive("step").step
             if step.HasField("motion_set_update"):

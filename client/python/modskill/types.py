@@ -100,6 +100,11 @@ class EnvSpec:
     task: str = "tracking"
     goal_obs: slice = dataclasses.field(default_factory=lambda: slice(0, 0))
     tasks: Dict[str, Tuple[int, Tuple[str, ...]]] = dataclasses.field(default_factory=dict, compare=False)
+    # Motor-skill families: the parameters Describe offers (name -> (unit, description)); a family
+    # session's ranges (name -> (lo, hi), in a's order) and its time warp's action index (-1: none).
+    family_parameters: Dict[str, Tuple[str, str]] = dataclasses.field(default_factory=dict, compare=False)
+    family: Dict[str, Tuple[float, float]] = dataclasses.field(default_factory=dict)
+    time_warp_action: int = -1
 
     @classmethod
     def from_proto(cls, spec: pb.EnvSpec) -> "EnvSpec":
@@ -135,6 +140,9 @@ class EnvSpec:
             task=spec.task or "tracking",
             goal_obs=slice(spec.goal_obs.start, spec.goal_obs.start + spec.goal_obs.size),
             tasks={t.name: (t.goal_size, tuple(t.reward_terms)) for t in spec.tasks},
+            family_parameters={p.name: (p.unit, p.description) for p in spec.family_parameters},
+            family={r.name: (r.lo, r.hi) for r in spec.family},
+            time_warp_action=spec.time_warp_action if spec.family else -1,
         )
 
     @property
@@ -196,6 +204,12 @@ class StepResult:
     # float32 [N, num_parts], m: mean body distance per part (EnvSpec.parts order) before any reset,
     # which parts a failing env lost; None where the server sent none
     part_error: Optional[np.ndarray] = None
+    # Family sessions only (``Client.session(family=...)``), None otherwise:
+    family_params: Optional[np.ndarray] = None  # float32 [N, P]: the parameters a of each row's episode
+    ended_family_params: Optional[np.ndarray] = None  # float32 [N, P]: a of the episode that ended (where done)
+    phase_step: Optional[np.ndarray] = None  # float32 [N]: frames the phase advanced (1: the clip's pace)
+    spike_reward: Optional[np.ndarray] = None  # float32 [N]: the one-off part of reward (a peak's)
+    fitness: Optional[np.ndarray] = None  # float32 [N]: the ended episode's fitness F (where done)
 
     # Proto fields the session consumes itself rather than handing to the caller.
     SESSION_FIELDS = ("motion_set_update",)
@@ -223,6 +237,11 @@ class StepResult:
             max_body_error=get("max_body_error"),
             mean_body_error=get("mean_body_error"),
             part_error=tensors.decode_field(result, "part_error"),
+            family_params=tensors.decode_field(result, "family_params"),
+            ended_family_params=tensors.decode_field(result, "ended_family_params"),
+            phase_step=tensors.decode_field(result, "phase_step"),
+            spike_reward=tensors.decode_field(result, "spike_reward"),
+            fitness=tensors.decode_field(result, "fitness"),
         )
 
     @property

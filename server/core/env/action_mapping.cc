@@ -3,14 +3,15 @@
 #include <algorithm>
 #include <cmath>
 
-
 namespace modskill {
 
 void MapActionToPdTargets(const ActionMapping& mapping, const HumanoidModel& humanoid, const EnvSpec& spec,
                           const float* action, const double* reference_dof, double* pd_targets) {
   const std::vector<double>& offset = humanoid.action_offset();
   const std::vector<double>& scale = humanoid.action_scale();
-  for (int a = 0; a < spec.action_size; ++a) {
+  // The hinges' actions; a family session's time warp comes after them (spec.time_warp_action).
+  const int hinge_actions = static_cast<int>(spec.action_hinge.size());
+  for (int a = 0; a < hinge_actions; ++a) {
     const int h = spec.action_hinge[a];
     const double clamped = std::clamp(static_cast<double>(action[a]), -1.0, 1.0);
     if (mapping.mode == ActionMode::kAbsolute) {

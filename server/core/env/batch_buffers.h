@@ -19,6 +19,7 @@ inline StepResultWidths WidthsOf(const EnvSpec& spec) {
   widths.amp_obs = spec.amp_obs_size;
   widths.reward_terms = static_cast<int64_t>(spec.reward_terms.size());
   widths.parts = spec.layout.num_parts();
+  widths.family_params = static_cast<int64_t>(spec.family.size());
   return widths;
 }
 

@@ -43,15 +43,36 @@ void SetUpTask(EnvContext& context) {
   }
 }
 
-// The strike task needs its target in the model; every other task runs on the model as given.
+// The strike task needs its target in the model, a family with obstacle parameters its obstacle;
+// every other session runs on the model as given.
 absl::StatusOr<std::shared_ptr<const HumanoidModel>> ModelForTask(std::shared_ptr<const HumanoidModel> humanoid,
-                                                                  TaskKind task) {
-  if (task != TaskKind::kStrike || mj_name2id(humanoid->model(), mjOBJ_BODY, kStrikeTargetName) >= 0) {
-    return humanoid;
-  }
+                                                                  const TrackingEnvConfig& env) {
+  const bool strike = env.task == TaskKind::kStrike &&
+                      mj_name2id(humanoid->model(), mjOBJ_BODY, kStrikeTargetName) < 0;
+  const bool obstacle = FamilyNeedsObstacle(env.family) &&
+                        mj_name2id(humanoid->model(), mjOBJ_GEOM, kFamilyObstacleName) < 0;
+  if (!strike && !obstacle) return humanoid;
   PhysicsOptions physics = humanoid->options();
-  physics.strike_target = true;
+  physics.strike_target |= strike;
+  physics.family_obstacle |= obstacle;
   return HumanoidModel::Create(humanoid->spec(), physics);
+}
+
+// A family session: one clip, tracking, residual actions; its context and spec.
+absl::Status SetUpFamily(EnvContext& context, EnvSpec* spec) {
+  const TrackingEnvConfig& env = context.config;
+  if (env.task != TaskKind::kTracking) return absl::InvalidArgumentError("family: a family session tracks (task tracking)");
+  if (env.action.mode != ActionMode::kResidual) return absl::InvalidArgumentError("family: needs action_mode RESIDUAL");
+  if (env.loop_clips) return absl::InvalidArgumentError("family: loop_clips is not for a family session");
+  if (context.motions->size() != 1) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("family: needs exactly one clip in motions, got ", context.motions->size()));
+  }
+  auto family = MakeFamilyContext(env.family, *context.humanoid, context.motions->clip(0));
+  if (!family.ok()) return family.status();
+  context.family = *std::move(family);
+  AddFamilyToSpec(env.family, spec);
+  return absl::OkStatus();
 }
 
 }  // namespace
@@ -96,13 +117,17 @@ absl::StatusOr<std::unique_ptr<EnvBatch>> EnvBatch::Create(const EnvBatchConfig&
                                                      humanoid->num_bodies()));
     }
   }
-  auto task_model = ModelForTask(std::move(humanoid), config.env.task);
+  auto task_model = ModelForTask(std::move(humanoid), config.env);
   if (!task_model.ok()) return task_model.status();
   std::unique_ptr<EnvBatch> batch(new EnvBatch());
   batch->context_.humanoid = *std::move(task_model);
-  batch->context_.spec = std::make_shared<const EnvSpec>(MakeEnvSpec(*batch->context_.humanoid, layout, config.env.task));
   batch->context_.motions = std::move(motions);
   batch->context_.config = config.env;
+  EnvSpec spec = MakeEnvSpec(*batch->context_.humanoid, layout, config.env.task);
+  if (!config.env.family.empty()) {
+    if (absl::Status status = SetUpFamily(batch->context_, &spec); !status.ok()) return status;
+  }
+  batch->context_.spec = std::make_shared<const EnvSpec>(std::move(spec));
   SetUpTask(batch->context_);
   batch->context_.reference_amp =
       std::make_shared<const ReferenceAmpFrames>(*batch->context_.spec, *batch->context_.motions);
@@ -161,9 +186,31 @@ absl::Status EnvBatch::Step(absl::Span<const float> actions) {
   return absl::OkStatus();
 }
 
+absl::Status EnvBatch::SetFamilyParameters(absl::Span<const float> rows) {
+  const std::vector<ParamRange>& ranges = spec().family;
+  if (ranges.empty()) return absl::FailedPreconditionError("family_params: the session is not a family session");
+  const size_t dims = ranges.size();
+  if (rows.size() != static_cast<size_t>(num_envs()) * dims) {
+    return absl::InvalidArgumentError(absl::StrCat("family_params: ", rows.size(), " values, expected ", num_envs(),
+                                                   " x ", dims));
+  }
+  for (size_t k = 0; k < rows.size(); ++k) {
+    const ParamRange& range = ranges[k % dims];
+    if (!(rows[k] >= static_cast<float>(range.lo) && rows[k] <= static_cast<float>(range.hi))) {
+      return absl::InvalidArgumentError(absl::StrCat("family_params: row ", k / dims, " ", range.name, " = ", rows[k],
+                                                     " is outside its range ", range.lo, ":", range.hi));
+    }
+  }
+  for (int i = 0; i < num_envs(); ++i) envs_[i]->SetNextFamilyParameters(&rows[static_cast<size_t>(i) * dims]);
+  return absl::OkStatus();
+}
+
 absl::Status EnvBatch::SetMotions(std::shared_ptr<const MotionLibrary> motions, std::vector<int> clip_ids,
                                   std::shared_ptr<const ReferenceAmpFrames> reference_amp,
                                   absl::Span<const double> weights) {
+  if (context_.family != nullptr) {
+    return absl::FailedPreconditionError("motions: a family session keeps its one clip");
+  }
   if (motions == nullptr || motions->size() == 0) return absl::InvalidArgumentError("motions: the library is empty");
   if (reference_amp == nullptr) return absl::InvalidArgumentError("reference_amp: missing");
   if (!clip_ids.empty() && static_cast<int>(clip_ids.size()) != motions->size()) {

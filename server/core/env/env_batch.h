@@ -53,6 +53,10 @@ class EnvBatch {
   absl::Status SetMotions(std::shared_ptr<const MotionLibrary> motions, std::vector<int> clip_ids,
                           std::shared_ptr<const ReferenceAmpFrames> reference_amp, absl::Span<const double> weights);
   const ClipSampler& sampler() const { return sampler_; }
+  // Family sessions: each env's parameters for its next episode, [num_envs, len(spec().family)],
+  // each inside its range (INVALID_ARGUMENT naming the row and parameter; FAILED_PRECONDITION
+  // outside a family session). Call between steps.
+  absl::Status SetFamilyParameters(absl::Span<const float> rows);
   // The termination distance from the next step on (a curriculum; call between steps).
   absl::Status SetTerminationDistance(double distance);
   const TrackingEnvConfig& env_config() const { return context_.config; }

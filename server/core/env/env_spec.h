@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "common/policy/family_parameters.h"
 #include "server/core/env/task_catalog.h"
 #include "server/core/sim/humanoid_model.h"
 #include "server/core/sim/part_layout.h"
@@ -58,6 +59,10 @@ struct EnvSpec {
   double control_dt = 0;
   std::vector<std::string> body_names;
   std::vector<std::string> joint_names;  // hinges in action order
+  // A motor-skill family session (family_env.h): its parameter ranges, and the action index of
+  // the time warp (the last action; -1 outside a family).
+  std::vector<ParamRange> family;
+  int time_warp_action = -1;
 };
 
 EnvSpec MakeEnvSpec(const HumanoidModel& humanoid, const PartLayout& layout, TaskKind task = TaskKind::kTracking);

@@ -1,6 +1,7 @@
 #include "server/core/env/humanoid_state.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "server/core/sim/body_kinematics.h"
 
@@ -42,6 +43,27 @@ void ReadReferenceState(const MotionClip& clip, int frame, HumanoidState* state)
   std::copy_n(clip.body_ang_vel.begin() + frame * bodies, bodies, state->body_ang_vel.begin());
   std::copy_n(clip.dof_pos.begin() + frame * hinges, hinges, state->dof_pos.begin());
   std::copy_n(clip.dof_vel.begin() + frame * hinges, hinges, state->dof_vel.begin());
+}
+
+void ReadReferenceStateAt(const MotionClip& clip, double phase, HumanoidState* state) {
+  const int last = clip.num_frames - 1;
+  phase = std::clamp(phase, 0.0, static_cast<double>(last));
+  const int f0 = static_cast<int>(std::floor(phase));
+  const double w = phase - f0;
+  ReadReferenceState(clip, f0, state);
+  if (w == 0 || f0 >= last) return;
+  const int bodies = clip.num_bodies, hinges = clip.num_hinges();
+  const size_t b1 = static_cast<size_t>(f0 + 1) * bodies, h1 = static_cast<size_t>(f0 + 1) * hinges;
+  for (int b = 0; b < bodies; ++b) {
+    state->body_pos[b] += w * (clip.body_pos[b1 + b] - state->body_pos[b]);
+    state->body_rot[b] = state->body_rot[b].slerp(w, clip.body_rot[b1 + b]);
+    state->body_vel[b] += w * (clip.body_vel[b1 + b] - state->body_vel[b]);
+    state->body_ang_vel[b] += w * (clip.body_ang_vel[b1 + b] - state->body_ang_vel[b]);
+  }
+  for (int h = 0; h < hinges; ++h) {
+    state->dof_pos[h] += w * (clip.dof_pos[h1 + h] - state->dof_pos[h]);
+    state->dof_vel[h] += w * (clip.dof_vel[h1 + h] - state->dof_vel[h]);
+  }
 }
 
 void SetSimulationToReference(const HumanoidModel& humanoid, const MotionClip& clip, int frame, mjData* data) {

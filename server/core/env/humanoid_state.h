@@ -27,6 +27,10 @@ struct HumanoidState {
 // From mjData's qpos and qvel alone (our own forward kinematics: no mj_kinematics needed).
 void ReadSimulatedState(const HumanoidModel& humanoid, const mjData* data, HumanoidState* state);
 void ReadReferenceState(const MotionClip& clip, int frame, HumanoidState* state);
+// The reference at a fractional frame (a time-warped phase, clamped to the clip): positions,
+// velocities and hinge angles interpolated linearly, rotations spherically. A whole `phase`
+// reads exactly that frame.
+void ReadReferenceStateAt(const MotionClip& clip, double phase, HumanoidState* state);
 
 // Sets qpos/qvel to the reference frame (root pose, hinge angles and all velocities) and clears
 // controls, applied forces and warnings; the next mj_step computes everything else.

@@ -22,6 +22,10 @@ TrackingEnv::TrackingEnv(const EnvContext* context, uint64_t seed)
   pd_targets_.assign(hinges, 0.0);
   body_distance_.assign(bodies, 0.0);
   amp_history_.assign(static_cast<size_t>(kAmpHistory) * context->spec->amp_obs_per_frame, 0.f);
+  if (context->family != nullptr) {
+    family_ = std::make_unique<FamilyEpisode>(context->family.get(), context->humanoid->model());
+    pd_.UseModel(family_->model());
+  }
 }
 
 TrackingEnv::~TrackingEnv() { mj_deleteData(data_); }
@@ -30,7 +34,8 @@ void TrackingEnv::Reset(EnvRow row) {
   const int clip = context_->sampler->Sample(rng_);
   const int frames = context_->motions->clip(clip).num_frames;
   // The last frame has no next target, so episodes start at most at frames - 2.
-  const int frame = context_->config.random_start_frame
+  // A family's episodes play the clip from its start, as the paper's do.
+  const int frame = context_->config.random_start_frame && family_ == nullptr
                         ? std::uniform_int_distribution<int>(0, std::max(0, frames - 2))(rng_)
                         : 0;
   ResetTo(clip, frame, row);
@@ -45,6 +50,7 @@ void TrackingEnv::ResetTo(int clip, int frame, EnvRow row) {
   loop_motion_ = PlanarMotion();
   if (LoopsClip()) cycle_motion_ = ClipCycleMotion(motion);
   finished_ = false;
+  if (family_ != nullptr) family_->Begin(motion, frame_, rng_);
   SetSimulationToReference(*context_->humanoid, motion, frame_, data_);
   if (goal_task_ != nullptr) {
     ReadSimulatedState(*context_->humanoid, data_, &sim_);
@@ -94,6 +100,10 @@ void TrackingEnv::Step(const float* action, EnvRow row) {
   if (finished_) {
     row.buffers->done[row.index] = 1;
     row.buffers->reward[row.index] = 0.f;
+    return;
+  }
+  if (family_ != nullptr) {
+    StepFamily(action, row);
     return;
   }
   const TrackingEnvConfig& config = context_->config;
@@ -253,7 +263,9 @@ void TrackingEnv::WriteObservation(EnvRow row) {
   const int i = row.index;
   float* obs = &out.obs[static_cast<size_t>(i) * spec.obs_size];
   ReadSimulatedState(*context_->humanoid, data_, &sim_);
-  if (goal_task_ != nullptr) {
+  if (family_ != nullptr) {
+    WriteFamilyObservation(obs, row);
+  } else if (goal_task_ != nullptr) {
     // The base motion's next frame, carried onto the character from the frame before it (a loop
     // goes on at frame 1, so there always is one).
     const int next_frame = NextFrame();

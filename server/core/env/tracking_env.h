@@ -23,6 +23,7 @@
 #include "server/core/env/base_motion_anchor.h"
 #include "server/core/env/batch_buffers.h"
 #include "server/core/env/env_spec.h"
+#include "server/core/env/family_episode.h"
 #include "server/core/env/fall_detection.h"
 #include "server/core/env/goal_task.h"
 #include "server/core/env/humanoid_state.h"
@@ -52,6 +53,8 @@ struct TrackingEnvConfig {
   bool random_start_frame = true;
   // Tracking: the clip loops (SessionConfig.loop_clips); episodes end at TaskEpisodeSteps.
   bool loop_clips = false;
+  // A motor-skill family (family_episode.h): the session's parameter ranges; empty otherwise.
+  std::vector<ParamRange> family;
   // false: an ended episode keeps its final state and later steps do nothing until the next
   // reset (rollouts and evaluation).
   bool auto_reset = true;
@@ -74,6 +77,7 @@ struct EnvContext {
   std::vector<int> vr_body_ids;  // kVrBodies, spec indices
   GoalTaskContext goal_task;
   std::shared_ptr<const FallDetector> fall_detector;
+  std::shared_ptr<const FamilyContext> family;  // family sessions only
 };
 
 // Where env i writes in a BatchBuffers.
@@ -106,6 +110,10 @@ class TrackingEnv {
   int64_t physics_resets() const { return physics_resets_; }
   // Reward terms and errors of the current state against the reference at the current frame.
   TrackingErrors CurrentTrackingTerms(float* terms);
+  // Family sessions: the parameters a of this env's next episode (one per range, inside it).
+  void SetNextFamilyParameters(const float* a) { family_->SetNext(a); }
+  // nullptr outside a family session.
+  const FamilyEpisode* family() const { return family_.get(); }
   // Rewrites the row's observation from qpos/qvel (after external changes to the state, such
   // as a push).
   void RefreshObservation(EnvRow row);
@@ -115,6 +123,10 @@ class TrackingEnv {
   void EndEpisode(EnvRow row);
   // The phases of Step after the physics: a blow-up, a tracking step, a goal task's step.
   void EndOnBlowUp(EnvRow row);
+  // A family session's step (tracking_env_family.cc): the time warp moves the phase, the
+  // reference there is displaced by the action, the task scores its peaks.
+  void StepFamily(const float* action, EnvRow row);
+  void WriteFamilyObservation(float* obs, EnvRow row);
   TrackingErrors ScoreTracking(float* terms, EnvRow row);
   void ScoreGoalTask(float* terms, EnvRow row);
   // The energy term (last column) and the reward, their sum.
@@ -139,6 +151,7 @@ class TrackingEnv {
 
   const EnvContext* context_;
   std::unique_ptr<GoalTask> goal_task_;  // steer, reach; nullptr otherwise
+  std::unique_ptr<FamilyEpisode> family_;  // family sessions; nullptr otherwise
   mjData* data_;
   PdController pd_;
   std::mt19937_64 rng_;

@@ -73,6 +73,10 @@ std::string BuildHumanoidMjcf(const HumanoidSpec& spec, const PhysicsOptions& op
                                         options.friction));
   absl::StrAppend(&xml, "  <worldbody>\n");
   absl::StrAppend(&xml, "    <geom name=\"floor\" type=\"plane\" size=\"100 100 0.2\" contype=\"1\" conaffinity=\"1\"/>\n");
+  if (options.family_obstacle) {
+    absl::StrAppend(&xml, "    <geom name=\"", kFamilyObstacleName,
+                    "\" type=\"box\" pos=\"0 0 -5\" size=\"0.05 1 0.05\" contype=\"1\" conaffinity=\"1\"/>\n");
+  }
   AppendBody(spec, options, 0, 2, &xml);
   if (options.strike_target) {
     // A 0.4 x 0.4 x 1.8 m pillar of 14.4 kg, colliding with the floor and every body.

@@ -14,6 +14,8 @@ namespace modskill {
 // half extents (m).
 inline constexpr char kStrikeTargetName[] = "strike_target";
 inline constexpr double kStrikeTargetHalfExtents[3] = {0.2, 0.2, 0.9};
+// A family session's obstacle geom (PhysicsOptions::family_obstacle).
+inline constexpr char kFamilyObstacleName[] = "family_obstacle";
 
 std::string BuildHumanoidMjcf(const HumanoidSpec& spec, const PhysicsOptions& options);
 

@@ -7,6 +7,7 @@ namespace modskill {
 
 PdController::PdController(const HumanoidModel& humanoid)
     : humanoid_(humanoid),
+      model_(humanoid.model()),
       dense_mass_(humanoid.options().pd_mode == PdMode::kStablePd ? humanoid.model()->nv * humanoid.model()->nv : 0),
       system_(humanoid.options().pd_mode == PdMode::kStablePd ? humanoid.model()->nv : 0,
               humanoid.options().pd_mode == PdMode::kStablePd ? humanoid.model()->nv : 0),
@@ -20,7 +21,7 @@ double PdController::Step(const double* targets, mjData* data) {
 }
 
 double PdController::StepPositionImplicit(const double* targets, mjData* data) {
-  const mjModel* m = humanoid_.model();
+  const mjModel* m = model_;
   const int hinges = humanoid_.num_hinges(), qvel0 = humanoid_.hinge_qvel_start();
   const std::vector<double>& kd = humanoid_.kd();
   for (int h = 0; h < hinges; ++h) data->ctrl[h] = targets[h];
@@ -40,7 +41,7 @@ double PdController::StepPositionImplicit(const double* targets, mjData* data) {
 // from (M + dt Kd) qddot = -bias + passive + the PD terms. Contacts are left out of the
 // prediction, as in the paper.
 double PdController::StepStablePd(const double* targets, mjData* data) {
-  const mjModel* m = humanoid_.model();
+  const mjModel* m = model_;
   const int nv = m->nv, hinges = humanoid_.num_hinges();
   const int qpos0 = humanoid_.hinge_qpos_start(), qvel0 = humanoid_.hinge_qvel_start();
   const double dt = m->opt.timestep;

@@ -33,6 +33,10 @@ struct PhysicsOptions {
   // A free standing box after the humanoid (the strike task's target, "strike_target"): its
   // joint comes after the humanoid's in qpos/qvel, so the humanoid's indices do not move.
   bool strike_target = false;
+  // A static box on the floor ("family_obstacle", part of the world body, so qpos does not grow)
+  // for motor-skill family sessions with obstacle parameters. It is built parked below the floor;
+  // each episode places and sizes it in the env's own model copy (family_episode.h).
+  bool family_obstacle = false;
 
   double physics_dt() const { return 1.0 / (control_hz * substeps); }
   double control_dt() const { return 1.0 / control_hz; }

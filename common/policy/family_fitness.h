@@ -13,14 +13,14 @@
 //             may slip up to V = 0.5 m/s before it counts as dragged;
 //   r_constraint in [0, 1]: how well the episode met its parameter's constraint (the task's own
 //             measure, e.g. exp of the jump height's error), weighted 0.1.
-#ifndef MODSKILL_LEARNER_FAMILY_FITNESS_H_
-#define MODSKILL_LEARNER_FAMILY_FITNESS_H_
+#ifndef MODSKILL_COMMON_POLICY_FAMILY_FITNESS_H_
+#define MODSKILL_COMMON_POLICY_FAMILY_FITNESS_H_
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "absl/types/span.h"
 
-namespace modskill::learner::family {
+namespace modskill {
 
 struct FitnessConstants {
   double sigma_pose = 2.67;
@@ -64,6 +64,6 @@ class FitnessAccumulator {
   double pose_ = 0, velocity_ = 0, contact_ = 0, drag_ = 0;
 };
 
-}  // namespace modskill::learner::family
+}  // namespace modskill
 
-#endif  // MODSKILL_LEARNER_FAMILY_FITNESS_H_
+#endif  // MODSKILL_COMMON_POLICY_FAMILY_FITNESS_H_

@@ -1,11 +1,11 @@
-#include "learner/family/fitness.h"
+#include "common/policy/family_fitness.h"
 
 #include <algorithm>
 #include <cmath>
 
 #include "absl/strings/str_cat.h"
 
-namespace modskill::learner::family {
+namespace modskill {
 namespace {
 
 absl::Status CheckMeasure(const char* name, double value) {
@@ -50,4 +50,4 @@ absl::StatusOr<Fitness> FitnessAccumulator::Finish(double r_constraint) const {
   return f;
 }
 
-}  // namespace modskill::learner::family
+}  // namespace modskill

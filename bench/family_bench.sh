@@ -1,0 +1,59 @@
+#!/usr/bin/env bash
+# The motor-skill family bar (issue 14): trains a family from one clip for a time budget against a
+# server of its own, then rolls the policy out at a few parameter values, and plots the elites'
+# coverage of the range over training time (DIR/coverage.png from DIR/run/progress.csv).
+#
+#   bench/family_bench.sh --out DIR [--minutes 20] [--clip deepmimic_jump]
+#       [--param gravity=4:14 ...] [--eval 5,9.81,14] [--resume] [-- LEARNER_FLAGS...]
+#
+# DIR/run/family_eval.csv: per evaluated value, the root's apex (m), the time with both feet off
+# the floor (s) and the fitness. --resume continues DIR/run (a run in parts, its checkpoint kept).
+set -euo pipefail
+repo="$(cd "$(dirname "$0")/.." && pwd)"
+BUILD="${MODSKILL_BUILD_DIR:-$repo/build}"
+OUT="" minutes=20 clip=deepmimic_jump eval_values="5,9.81,14" resume=""
+params=()
+while (($#)); do
+  case "$1" in
+    --out) OUT="$2"; shift 2 ;;
+    --minutes) minutes="$2"; shift 2 ;;
+    --clip) clip="$2"; shift 2 ;;
+    --param) params+=(--param "$2"); shift 2 ;;
+    --eval) eval_values="$2"; shift 2 ;;
+    --resume) resume="--resume"; shift ;;
+    --) shift; break ;;
+    *) echo "bench/family_bench.sh: unknown argument $1" >&2; exit 2 ;;
+  esac
+done
+[[ -n "$OUT" ]] || { echo "bench/family_bench.sh: --out DIR is required" >&2; exit 2; }
+((${#params[@]})) || params=(--param gravity=4:14)
+mkdir -p "$OUT"
+source "$repo/bench/side_by_side.sh"  # free_port, stop_servers at exit
+
+port=$(free_port)
+"$BUILD/server/modskill-server" --port "$port" --threads 1 > "$OUT/server.log" 2>&1 &
+SERVERS+=($!)
+"$BUILD/learner/modskill-learner" --servers "127.0.0.1:$port" --run_dir "$OUT/run" --family "$clip" "${params[@]}" \
+    --time_budget_min "$minutes" --iterations 1000000 --seed 1 --family_eval "$eval_values" $resume "$@" \
+    > "$OUT/train.log" 2>&1 || { echo "error: the learner failed; see $OUT/train.log" >&2; exit 1; }
+
+/usr/bin/python3 - "$OUT" <<'EOF'
+import csv, sys
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+out = sys.argv[1]
+rows = list(csv.DictReader(open(f"{out}/run/progress.csv")))
+minutes = [float(r["wall_s"]) / 60 for r in rows]
+fig, axes = plt.subplots(1, 2, figsize=(10, 3.5))
+axes[0].plot(minutes, [float(r["coverage"]) for r in rows])
+axes[0].set_xlabel("training time (min)"); axes[0].set_ylabel("share of the range covered by elites")
+axes[1].plot(minutes, [float(r["mean_fitness"]) for r in rows], label="mean episode F")
+axes[1].plot(minutes, [float(r["mean_length"]) / 100 for r in rows], label="mean episode length / 100")
+axes[1].set_xlabel("training time (min)"); axes[1].legend()
+fig.tight_layout(); fig.savefig(f"{out}/coverage.png", dpi=100)
+last = rows[-1]
+print(f"after {minutes[-1]:.1f} min, {last['env_steps']} env steps: coverage {float(last['coverage']):.3f}, "
+      f"{last['elites']} elites, mean F {float(last['mean_fitness']):.3f}")
+EOF
+cat "$OUT/run/family_eval.csv"

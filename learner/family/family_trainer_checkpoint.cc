@@ -1,0 +1,131 @@
+// FamilyTrainer's files: checkpoint.pt (networks, optimizers, counters and the elite set, written
+// atomically), parameterization.pt, and progress.csv (one row per iteration).
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "absl/strings/str_join.h"
+#include "common/atomic_file.h"
+#include "learner/family/family_trainer.h"
+
+namespace modskill::learner::family {
+namespace {
+
+constexpr size_t kMaxCheckpointBytes = size_t{1} << 30;
+
+// The parameter ranges as text: a resumed run must train the same family.
+std::string RangesKey(const std::vector<ParamRange>& ranges, const std::string& clip) {
+  std::vector<std::string> parts = {clip};
+  for (const ParamRange& range : ranges) parts.push_back(absl::StrCat(range.name, "=", range.lo, ":", range.hi));
+  return absl::StrJoin(parts, " ");
+}
+
+std::string Serialize(torch::serialize::OutputArchive& archive) {  // save_to is not const
+  std::ostringstream out;
+  archive.save_to(out);
+  return out.str();
+}
+
+}  // namespace
+
+absl::Status FamilyTrainer::SaveCheckpoint() const {
+  try {
+    torch::serialize::OutputArchive archive, model, optimizer, net, net_optimizer;
+    model_->save(model);
+    optimizer_->save(optimizer);
+    net_->save(net);
+    net_optimizer_->save(net_optimizer);
+    archive.write("model", model);
+    archive.write("optimizer", optimizer);
+    archive.write("parameterization", net);
+    archive.write("parameterization_optimizer", net_optimizer);
+    const std::string key = RangesKey(config_.ranges, config_.clip);
+    archive.write("family", torch::from_blob(const_cast<char*>(key.data()), {static_cast<int64_t>(key.size())},
+                                             torch::kChar).clone());
+    archive.write("counters", torch::tensor({static_cast<int64_t>(iteration_), env_steps_,
+                                             static_cast<int64_t>(wall_s_ * 1000)}));
+    std::vector<torch::Tensor> params, fitness, trajectories;
+    for (int64_t id : elites_->Ids()) {
+      const Elite& elite = elites_->elite(id);
+      params.push_back(torch::tensor(elite.params, torch::kDouble));
+      fitness.push_back(torch::tensor(elite.fitness, torch::kDouble));
+      trajectories.push_back(elite.trajectory);
+    }
+    if (!params.empty()) {
+      archive.write("elite_params", torch::stack(params));
+      archive.write("elite_fitness", torch::stack(fitness));
+      archive.write("elite_trajectories", torch::stack(trajectories));
+    }
+    if (absl::Status status = WriteFileAtomically(config_.run_dir + "/parameterization.pt", Serialize(net));
+        !status.ok()) {
+      return status;
+    }
+    return WriteFileAtomically(config_.run_dir + "/checkpoint.pt", Serialize(archive));
+  } catch (const c10::Error& e) {
+    return absl::InternalError(absl::StrCat("checkpoint: ", e.what_without_backtrace()));
+  }
+}
+
+absl::Status FamilyTrainer::LoadCheckpoint() {
+  const std::string path = config_.run_dir + "/checkpoint.pt";
+  auto bytes = ReadFileToString(path, kMaxCheckpointBytes);
+  if (!bytes.ok()) return absl::NotFoundError(absl::StrCat("--resume: ", bytes.status().message()));
+  try {
+    torch::serialize::InputArchive archive, model, optimizer, net, net_optimizer;
+    archive.load_from(bytes->data(), bytes->size());
+    torch::Tensor family, counters;
+    archive.read("family", family);
+    const std::string key(static_cast<const char*>(family.data_ptr()), family.numel());
+    if (key != RangesKey(config_.ranges, config_.clip)) {
+      return absl::FailedPreconditionError(absl::StrCat("--resume: ", path, " trained the family '", key,
+                                                        "', not '", RangesKey(config_.ranges, config_.clip), "'"));
+    }
+    archive.read("model", model);
+    archive.read("optimizer", optimizer);
+    archive.read("parameterization", net);
+    archive.read("parameterization_optimizer", net_optimizer);
+    model_->load(model);
+    optimizer_->load(optimizer);
+    net_->load(net);
+    net_optimizer_->load(net_optimizer);
+    archive.read("counters", counters);
+    iteration_ = static_cast<int>(counters[0].item<int64_t>());
+    env_steps_ = counters[1].item<int64_t>();
+    wall_s_ = counters[2].item<int64_t>() / 1000.0;
+    torch::Tensor params, fitness, trajectories;
+    if (archive.try_read("elite_params", params)) {
+      archive.read("elite_fitness", fitness);
+      archive.read("elite_trajectories", trajectories);
+      for (int64_t e = 0; e < params.size(0); ++e) {
+        const std::vector<double> a(params[e].data_ptr<double>(), params[e].data_ptr<double>() + params.size(1));
+        if (auto entered = elites_->Offer(a, fitness[e].item<double>(), trajectories[e]); !entered.ok()) {
+          return entered.status();
+        }
+        // The visit density restarts from the elites' parameters (it is not saved).
+        if (absl::Status status = curriculum_->AddVisited(a); !status.ok()) return status;
+      }
+    }
+  } catch (const c10::Error& e) {
+    return absl::DataLossError(absl::StrCat("--resume: ", path, ": ", e.what_without_backtrace()));
+  }
+  return absl::OkStatus();
+}
+
+absl::Status FamilyTrainer::AppendProgress(const FamilyIterationStats& s) const {
+  const std::string path = config_.run_dir + "/progress.csv";
+  const bool fresh = !std::filesystem::exists(path);
+  std::ofstream out(path, std::ios::app);
+  if (fresh) {
+    out << "iteration,env_steps,wall_s,episodes,mean_return,mean_length,mean_fitness,elites,coverage,"
+           "curriculum_mode,exploration_rate,net_loss,approx_kl\n";
+  }
+  out << absl::StrFormat("%d,%d,%.1f,%d,%.4f,%.2f,%.4f,%d,%.4f,%s,%.4f,%.6f,%.6f\n", s.iteration, s.env_steps,
+                         s.wall_s, s.episodes, s.mean_return, s.mean_length, s.mean_fitness, s.elites, s.coverage,
+                         s.mode, s.exploration_rate, s.net_loss, s.approx_kl);
+  if (!out) return absl::InternalError(absl::StrCat(path, ": cannot append"));
+  return absl::OkStatus();
+}
+
+}  // namespace modskill::learner::family

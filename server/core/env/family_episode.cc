@@ -1,0 +1,277 @@
+#include "server/core/env/family_episode.h"
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <string>
+#include <utility>
+
+#include "absl/strings/str_cat.h"
+#include "server/core/sim/mjcf_builder.h"
+#include "server/core/sim/rotation_math.h"
+
+namespace modskill {
+namespace {
+
+// Parameters that need a model per body proportion (HumanoidSpec::Scaled), which no env builds yet.
+constexpr const char* kNotOffered[] = {"leg_scale", "arm_scale"};
+constexpr const char* kEffectorBodies[] = {"R_Ankle", "L_Ankle", "R_Wrist", "L_Wrist"};
+constexpr double kObstacleHalfDepth = 0.05, kObstacleHalfWidth = 1.0;  // m
+constexpr double kDefaultObstacleHeight = 0.1;                         // m
+
+bool Offered(absl::string_view name) {
+  return std::none_of(std::begin(kNotOffered), std::end(kNotOffered),
+                      [name](const char* missing) { return name == missing; });
+}
+
+int IndexOf(const std::vector<ParamRange>& ranges, absl::string_view name) {
+  for (size_t i = 0; i < ranges.size(); ++i) {
+    if (ranges[i].name == name) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+// The clip's own heights and travel: the defaults of the height parameters and the levels a
+// peak must clear.
+void MeasureClip(const MotionClip& clip, FamilyContext* family) {
+  const int bodies = clip.num_bodies;
+  family->root_start_height = clip.body_pos[0].z();
+  family->root_apex_height = family->root_start_height;
+  family->effector_start_height = 0;
+  for (int e : family->effectors) family->effector_start_height = std::max(family->effector_start_height, clip.body_pos[e].z());
+  family->effector_peak_height = family->effector_start_height;
+  for (int f = 0; f < clip.num_frames; ++f) {
+    family->root_apex_height = std::max(family->root_apex_height, clip.body_pos[static_cast<size_t>(f) * bodies].z());
+    for (int e : family->effectors) {
+      family->effector_peak_height =
+          std::max(family->effector_peak_height, clip.body_pos[static_cast<size_t>(f) * bodies + e].z());
+    }
+  }
+  const Vec3 travel = clip.body_pos[static_cast<size_t>(clip.num_frames - 1) * bodies] - clip.body_pos[0];
+  family->travel = std::hypot(travel.x(), travel.y());
+  for (int foot : family->feet) family->foot_contact_height.push_back(clip.body_pos[foot].z() + 0.03);
+}
+
+}  // namespace
+
+absl::Status ValidateFamilyRanges(absl::Span<const ParamRange> ranges, absl::string_view field) {
+  if (ranges.empty()) return absl::InvalidArgumentError(absl::StrCat(field, ": no parameter ranges"));
+  std::set<std::string> seen;
+  for (const ParamRange& range : ranges) {
+    if (absl::Status valid = ValidateParamRange(range); !valid.ok()) {
+      return absl::InvalidArgumentError(absl::StrCat(field, ": ", valid.message()));
+    }
+    if (!Offered(range.name)) {
+      return absl::InvalidArgumentError(absl::StrCat(field, ": param ", range.name,
+                                                     " is not offered by this server yet (it needs a model per body "
+                                                     "proportion); Describe lists the offered ones"));
+    }
+    if (!seen.insert(range.name).second) {
+      return absl::InvalidArgumentError(absl::StrCat(field, ": param ", range.name, " is given twice"));
+    }
+  }
+  return absl::OkStatus();
+}
+
+std::vector<FamilyParameterInfo> OfferedFamilyParameters() {
+  std::vector<FamilyParameterInfo> offered;
+  for (const FamilyParameterInfo& info : FamilyParameterCatalog()) {
+    if (Offered(info.name)) offered.push_back(info);
+  }
+  return offered;
+}
+
+bool FamilyNeedsObstacle(absl::Span<const ParamRange> ranges) {
+  return std::any_of(ranges.begin(), ranges.end(), [](const ParamRange& range) {
+    return range.name == "obstacle_height" || range.name == "obstacle_distance";
+  });
+}
+
+absl::StatusOr<std::shared_ptr<const FamilyContext>> MakeFamilyContext(std::vector<ParamRange> ranges,
+                                                                       const HumanoidModel& humanoid,
+                                                                       const MotionClip& clip) {
+  if (absl::Status valid = ValidateFamilyRanges(ranges, "family"); !valid.ok()) return valid;
+  auto family = std::make_shared<FamilyContext>();
+  family->gravity = IndexOf(ranges, "gravity");
+  family->body_mass_scale = IndexOf(ranges, "body_mass_scale");
+  family->jump_height = IndexOf(ranges, "jump_height");
+  family->target_height = IndexOf(ranges, "target_height");
+  family->obstacle_height = IndexOf(ranges, "obstacle_height");
+  family->obstacle_distance = IndexOf(ranges, "obstacle_distance");
+  const mjModel* model = humanoid.model();
+  if (FamilyNeedsObstacle(ranges)) {
+    family->obstacle_geom = mj_name2id(model, mjOBJ_GEOM, kFamilyObstacleName);
+    if (family->obstacle_geom < 0) return absl::InternalError("family: the model has no obstacle geom");
+  }
+  family->humanoid_geom.assign(model->ngeom, 0);
+  for (int g = 0; g < model->ngeom; ++g) family->humanoid_geom[g] = model->geom_bodyid[g] != 0;
+  const HumanoidSpec& spec = humanoid.spec();
+  family->feet = FootBodies(spec);
+  for (const char* name : kEffectorBodies) family->effectors.push_back(spec.BodyIndex(name));
+  family->ranges = std::move(ranges);
+  MeasureClip(clip, family.get());
+  return family;
+}
+
+void AddFamilyToSpec(const std::vector<ParamRange>& ranges, EnvSpec* spec) {
+  const int goal = static_cast<int>(ranges.size()) + 1;
+  spec->goal_obs = Slice{spec->obs_size, goal};
+  spec->obs_size += goal;
+  spec->task_obs_size += goal;
+  spec->time_warp_action = spec->action_size;
+  spec->action_size += 1;
+  spec->reward_terms = {"pos", "rot", "vel", "ang_vel", "time", "task", "energy"};
+  spec->family = ranges;
+}
+
+double PhaseStep(float tau) { return std::exp(std::clamp(1.5 * static_cast<double>(tau), -2.0, 1.0)); }
+
+FamilyEpisode::FamilyEpisode(const FamilyContext* family, const mjModel* base)
+    : family_(family), base_(base), model_(mj_copyModel(nullptr, base)) {
+  a_.assign(family->ranges.size(), 0.f);
+  next_.assign(family->ranges.size(), 0.f);
+  foot_speeds_.reserve(family->feet.size());
+}
+
+FamilyEpisode::~FamilyEpisode() { mj_deleteModel(model_); }
+
+void FamilyEpisode::SetNext(const float* a) {
+  std::copy_n(a, next_.size(), next_.begin());
+  has_next_ = true;
+}
+
+void FamilyEpisode::Begin(const MotionClip& clip, int frame, std::mt19937_64& rng) {
+  if (has_next_) {
+    a_ = next_;
+  } else {
+    for (size_t i = 0; i < a_.size(); ++i) {
+      const ParamRange& range = family_->ranges[i];
+      a_[i] = static_cast<float>(std::uniform_real_distribution<double>(range.lo, range.hi)(rng));
+    }
+  }
+  ApplyToModel(clip);
+  phase_ = frame;
+  prev_root_vz_ = prev_effector_vz_ = 0;
+  jump_scored_ = target_scored_ = touched_obstacle_ = false;
+  r_jump_ = r_target_ = 0;
+  fitness_ = FitnessAccumulator();
+}
+
+void FamilyEpisode::ApplyToModel(const MotionClip& clip) {
+  model_->opt.gravity[2] = -Param(family_->gravity, -base_->opt.gravity[2]);
+  const double mass_scale = Param(family_->body_mass_scale, 1.0);
+  for (int b = 0; b < base_->nbody; ++b) {
+    model_->body_mass[b] = base_->body_mass[b] * mass_scale;
+    model_->body_subtreemass[b] = base_->body_subtreemass[b] * mass_scale;
+    for (int k = 0; k < 3; ++k) model_->body_inertia[3 * b + k] = base_->body_inertia[3 * b + k] * mass_scale;
+  }
+  if (family_->obstacle_geom >= 0) PlaceObstacle(clip);
+}
+
+void FamilyEpisode::PlaceObstacle(const MotionClip& clip) {
+  const double height = std::max(Param(family_->obstacle_height, kDefaultObstacleHeight), 0.002);
+  const double distance = Param(family_->obstacle_distance, 0.5 * family_->travel);
+  // Across the clip's start heading, `distance` ahead of the start root, standing on the floor.
+  const Quat heading = HeadingRotation(clip.body_rot[0]);
+  const Vec3 ahead = heading * Vec3::UnitX();
+  const int g = family_->obstacle_geom;
+  model_->geom_pos[3 * g + 0] = clip.body_pos[0].x() + distance * ahead.x();
+  model_->geom_pos[3 * g + 1] = clip.body_pos[0].y() + distance * ahead.y();
+  model_->geom_pos[3 * g + 2] = 0.5 * height;
+  model_->geom_quat[4 * g + 0] = heading.w();
+  model_->geom_quat[4 * g + 1] = heading.x();
+  model_->geom_quat[4 * g + 2] = heading.y();
+  model_->geom_quat[4 * g + 3] = heading.z();
+  model_->geom_size[3 * g + 0] = kObstacleHalfDepth;
+  model_->geom_size[3 * g + 1] = kObstacleHalfWidth;
+  model_->geom_size[3 * g + 2] = 0.5 * height;
+  // The broad phase culls by the bounding sphere.
+  model_->geom_rbound[g] = std::sqrt(kObstacleHalfDepth * kObstacleHalfDepth +
+                                     kObstacleHalfWidth * kObstacleHalfWidth + 0.25 * height * height);
+}
+
+double FamilyEpisode::Advance(float tau, int last_frame) {
+  const double before = phase_;
+  phase_ = std::min(phase_ + PhaseStep(tau), static_cast<double>(last_frame));
+  return phase_ - before;
+}
+
+float FamilyEpisode::PeakSpike(double height, double vertical_velocity, double threshold, int param,
+                               double* prev_velocity, bool* scored, double* constraint) const {
+  const bool peak = *prev_velocity > 0 && vertical_velocity <= 0 && height > threshold;
+  *prev_velocity = vertical_velocity;
+  if (param < 0 || *scored || !peak) return 0.f;
+  *scored = true;
+  const double error = (height - a_[param]) / kFamilyPeakSigma;
+  *constraint = std::exp(-error * error);
+  return static_cast<float>(kFamilySpikeWeight * *constraint);
+}
+
+FamilyStepScore FamilyEpisode::Score(const HumanoidState& sim, const HumanoidState& reference, const mjData* data,
+                                     double phase_step) {
+  FamilyStepScore score;
+  const double time_error = phase_step - 1.0;
+  score.time_reward = static_cast<float>(kFamilyTimeWeight * std::exp(-time_error * time_error / kFamilyTimeSigma));
+  score.spike += PeakSpike(sim.body_pos[0].z(), sim.body_vel[0].z(), family_->root_start_height + 0.05,
+                           family_->jump_height, &prev_root_vz_, &jump_scored_, &r_jump_);
+  int highest = family_->effectors[0];
+  for (int e : family_->effectors) {
+    if (sim.body_pos[e].z() > sim.body_pos[highest].z()) highest = e;
+  }
+  score.spike += PeakSpike(sim.body_pos[highest].z(), sim.body_vel[highest].z(), family_->effector_start_height + 0.2,
+                           family_->target_height, &prev_effector_vz_, &target_scored_, &r_target_);
+  for (int c = 0; c < data->ncon && family_->obstacle_geom >= 0; ++c) {
+    const mjContact& contact = data->contact[c];
+    const int other = contact.geom1 == family_->obstacle_geom   ? contact.geom2
+                      : contact.geom2 == family_->obstacle_geom ? contact.geom1
+                                                                : -1;
+    if (other >= 0 && family_->humanoid_geom[other]) touched_obstacle_ = true;
+  }
+  AddFitnessFrame(sim, reference);
+  return score;
+}
+
+void FamilyEpisode::AddFitnessFrame(const HumanoidState& sim, const HumanoidState& reference) {
+  FitnessFrame frame;
+  for (size_t h = 0; h < sim.dof_pos.size(); ++h) {
+    const double dq = sim.dof_pos[h] - reference.dof_pos[h], dw = sim.dof_vel[h] - reference.dof_vel[h];
+    frame.pose_error += dq * dq;
+    frame.velocity_error += dw * dw;
+  }
+  foot_speeds_.clear();
+  for (size_t f = 0; f < family_->feet.size(); ++f) {
+    const int body = family_->feet[f];
+    const bool sim_contact = sim.body_pos[body].z() < family_->foot_contact_height[f];
+    const bool reference_contact = reference.body_pos[body].z() < family_->foot_contact_height[f];
+    frame.contact_mismatches += sim_contact != reference_contact;
+    if (sim_contact) foot_speeds_.push_back(std::hypot(sim.body_vel[body].x(), sim.body_vel[body].y()));
+  }
+  frame.contact_foot_speeds = foot_speeds_;
+  // A blow-up ends the episode before this; a measure is never negative, so this cannot fail.
+  fitness_.AddFrame(frame).IgnoreError();
+}
+
+double FamilyEpisode::EpisodeFitness() const {
+  double constraint = 0;
+  bool any = false;
+  auto combine = [&](bool active, double r) {
+    if (!active) return;
+    constraint = any ? constraint * r : r;
+    any = true;
+  };
+  combine(family_->jump_height >= 0, r_jump_);
+  combine(family_->target_height >= 0, r_target_);
+  combine(family_->obstacle_geom >= 0, touched_obstacle_ ? 0.0 : 1.0);
+  absl::StatusOr<Fitness> fitness = fitness_.Finish(constraint);
+  return fitness.ok() ? fitness->value : 0.0;
+}
+
+void FamilyEpisode::WriteGoal(int last_frame, float* goal) const {
+  for (size_t i = 0; i < a_.size(); ++i) {
+    const ParamRange& range = family_->ranges[i];
+    goal[i] = range.hi > range.lo ? static_cast<float>((a_[i] - range.lo) / (range.hi - range.lo)) : 0.f;
+  }
+  goal[a_.size()] = last_frame > 0 ? static_cast<float>(phase_ / last_frame) : 0.f;
+}
+
+}  // namespace modskill

@@ -1,0 +1,210 @@
+// A motor-skill family's envs (server/core/env/family_episode.h): the spec, the time warp, the
+// parameters reaching the physics (gravity, masses, the obstacle), the jump's spike, the fitness
+// and bad parameter rows.
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "server/core/sim/mjcf_builder.h"
+#include "tests/test_fixtures.h"
+
+namespace modskill {
+namespace {
+
+std::shared_ptr<const MotionLibrary> Clip(const char* name) {
+  auto subset = DefaultMotions()->Subset({name});
+  EXPECT_TRUE(subset.ok()) << subset.status();
+  return std::make_shared<const MotionLibrary>(*std::move(subset));
+}
+
+EnvBatchConfig FamilyConfig(std::vector<ParamRange> ranges, int envs = 2) {
+  EnvBatchConfig config;
+  config.num_envs = envs;
+  config.seed = 5;
+  config.env.action.mode = ActionMode::kResidual;
+  config.env.termination_distance = kFamilyDefaultTerminationDistance;
+  config.env.family = std::move(ranges);
+  return config;
+}
+
+// Every env on `a` (one value per range) from its next episode on, then a reset.
+void StartAll(EnvBatch& batch, const std::vector<float>& a) {
+  std::vector<float> rows;
+  for (int i = 0; i < batch.num_envs(); ++i) rows.insert(rows.end(), a.begin(), a.end());
+  ASSERT_TRUE(batch.SetFamilyParameters(rows).ok());
+  batch.Reset();
+}
+
+// Zero displacement and a time warp of tau for every env.
+std::vector<float> Actions(const EnvBatch& batch, float tau) {
+  std::vector<float> actions(static_cast<size_t>(batch.num_envs()) * batch.spec().action_size, 0.f);
+  for (int i = 0; i < batch.num_envs(); ++i) actions[static_cast<size_t>(i) * batch.spec().action_size + batch.spec().time_warp_action] = tau;
+  return actions;
+}
+
+// Env 0 leaves the floor at kTakeOff m/s: the open-loop clip alone does not get off the floor.
+constexpr double kTakeOff = 2.5;
+void Launch(EnvBatch& batch) { batch.env(0).mutable_data()->qvel[2] = kTakeOff; }
+
+// The highest the root gets after a launch, until the episode ends (or 200 steps).
+double RootApex(EnvBatch& batch) {
+  double apex = 0;
+  Launch(batch);
+  const std::vector<float> actions = Actions(batch, 0.f);
+  for (int step = 0; step < 200; ++step) {
+    EXPECT_TRUE(batch.Step(actions).ok());
+    if (batch.buffers().done[0]) break;
+    apex = std::max(apex, batch.env(0).data()->qpos[2]);
+  }
+  return apex;
+}
+
+TEST(FamilyEnvTest, SpecAppendsParametersPhaseAndTimeWarp) {
+  auto batch = EnvBatch::Create(FamilyConfig({{"gravity", 4, 14}, {"jump_height", 1.0, 1.0}}), Clip("deepmimic_jump"));
+  ASSERT_TRUE(batch.ok()) << batch.status();
+  const EnvSpec& spec = (*batch)->spec();
+  EXPECT_EQ(spec.obs_size, 934 + 3);
+  EXPECT_EQ(spec.goal_obs.start, 934);
+  EXPECT_EQ(spec.goal_obs.size, 3);
+  EXPECT_EQ(spec.action_size, 70);
+  EXPECT_EQ(spec.time_warp_action, 69);
+  EXPECT_EQ(spec.reward_terms.back(), "energy");
+  EXPECT_NE(std::find(spec.reward_terms.begin(), spec.reward_terms.end(), "task"), spec.reward_terms.end());
+  EXPECT_EQ((*batch)->buffers().widths.family_params, 2);
+  // A tracking batch has none of it.
+  EnvBatchConfig tracking;
+  tracking.num_envs = 1;
+  auto plain = EnvBatch::Create(tracking, Clip("deepmimic_jump"));
+  ASSERT_TRUE(plain.ok());
+  EXPECT_EQ((*plain)->spec().time_warp_action, -1);
+  EXPECT_TRUE((*plain)->spec().family.empty());
+}
+
+TEST(FamilyEnvTest, TimeWarpAdvancesThePhaseByExpOfClippedTau) {
+  EXPECT_DOUBLE_EQ(PhaseStep(0.f), 1.0);
+  EXPECT_DOUBLE_EQ(PhaseStep(0.4f), std::exp(1.5 * static_cast<double>(0.4f)));
+  EXPECT_DOUBLE_EQ(PhaseStep(1.f), std::exp(1.0));    // clipped at 1
+  EXPECT_DOUBLE_EQ(PhaseStep(-1.f), std::exp(-1.5));
+  EXPECT_DOUBLE_EQ(PhaseStep(-5.f), std::exp(-2.0));  // clipped at -2
+  auto batch = EnvBatch::Create(FamilyConfig({{"gravity", 9.81, 9.81}}, 1), Clip("deepmimic_jump"));
+  ASSERT_TRUE(batch.ok()) << batch.status();
+  EnvBatch& envs = **batch;
+  envs.Reset();
+  const int last = envs.motions().clip(0).num_frames - 1;
+  double phase = 0;
+  for (float tau : {0.f, -1.f, -1.f, 1.f, 0.f}) {
+    ASSERT_TRUE(envs.Step(Actions(envs, tau)).ok());
+    ASSERT_FALSE(envs.buffers().done[0]);
+    phase += PhaseStep(tau);
+    EXPECT_NEAR(envs.buffers().phase_step[0], PhaseStep(tau), 1e-6);
+    EXPECT_NEAR(envs.env(0).family()->phase(), phase, 1e-9);
+    EXPECT_EQ(envs.buffers().frame[0], static_cast<int>(std::floor(phase)));
+    // The goal ends with the phase as a share of the clip.
+    EXPECT_NEAR(envs.buffers().obs[envs.spec().goal_obs.start + 1], phase / last, 1e-6);
+  }
+}
+
+TEST(FamilyEnvTest, ParametersReachTheEnvsOwnModel) {
+  auto batch = EnvBatch::Create(
+      FamilyConfig({{"gravity", 4, 14}, {"body_mass_scale", 0.5, 2}, {"obstacle_height", 0, 0.5}, {"obstacle_distance", 1, 3}}),
+      Clip("deepmimic_walk"));
+  ASSERT_TRUE(batch.ok()) << batch.status();
+  EnvBatch& envs = **batch;
+  StartAll(envs, {5.f, 1.25f, 0.3f, 2.f});
+  const mjModel* own = envs.env(0).family()->model();
+  const mjModel* shared = envs.humanoid().model();
+  EXPECT_NE(own, shared);
+  EXPECT_DOUBLE_EQ(own->opt.gravity[2], -5.0);
+  EXPECT_NEAR(shared->opt.gravity[2], -9.81, 1e-9);  // the session's model is untouched
+  for (int b = 1; b < shared->nbody; ++b) EXPECT_NEAR(own->body_mass[b], 1.25 * shared->body_mass[b], 1e-9) << b;
+  // The obstacle stands on the floor, 2 m ahead of the start root along the clip's heading.
+  const int g = mj_name2id(own, mjOBJ_GEOM, kFamilyObstacleName);
+  ASSERT_GE(g, 0);
+  EXPECT_NEAR(own->geom_size[3 * g + 2], 0.15, 1e-6);
+  EXPECT_NEAR(own->geom_pos[3 * g + 2], 0.15, 1e-6);
+  const Vec3 start = envs.motions().clip(0).body_pos[0];
+  EXPECT_NEAR(std::hypot(own->geom_pos[3 * g] - start.x(), own->geom_pos[3 * g + 1] - start.y()), 2.0, 1e-6);
+  // The normalized parameters lead the goal.
+  const float* goal = &envs.buffers().obs[envs.spec().goal_obs.start];
+  EXPECT_NEAR(goal[0], 0.1, 1e-6);
+  EXPECT_NEAR(goal[1], 0.5, 1e-6);
+  EXPECT_NEAR(envs.buffers().family_params[0], 5.f, 1e-6);
+}
+
+TEST(FamilyEnvTest, LowerGravityJumpsHigher) {
+  auto batch = EnvBatch::Create(FamilyConfig({{"gravity", 4, 14}}, 1), Clip("deepmimic_jump"));
+  ASSERT_TRUE(batch.ok()) << batch.status();
+  EnvBatch& envs = **batch;
+  StartAll(envs, {4.f});
+  const double low = RootApex(envs);
+  StartAll(envs, {14.f});
+  const double high = RootApex(envs);
+  EXPECT_GT(low, high + 0.05) << "apex under 4 m/s^2: " << low << ", under 14 m/s^2: " << high;
+}
+
+TEST(FamilyEnvTest, JumpHeightPaysOneSpikeAtTheApexAndFitnessAtTheEnd) {
+  // Launched at 2.5 m/s the root rises 2.5^2 / (2 g) = 0.32 m above its start.
+  auto batch = EnvBatch::Create(FamilyConfig({{"jump_height", 0.5, 1.5}}, 1), Clip("deepmimic_jump"));
+  ASSERT_TRUE(batch.ok()) << batch.status();
+  EnvBatch& envs = **batch;
+  StartAll(envs, {1.2f});
+  Launch(envs);
+  const std::vector<float> actions = Actions(envs, 0.f);
+  const int task_column = static_cast<int>(std::find(envs.spec().reward_terms.begin(), envs.spec().reward_terms.end(),
+                                                     "task") - envs.spec().reward_terms.begin());
+  int spikes = 0;
+  bool ended = false;
+  for (int step = 0; step < 200 && !ended; ++step) {
+    ASSERT_TRUE(envs.Step(actions).ok());
+    const BatchBuffers& out = envs.buffers();
+    const float spike = out.spike_reward[0];
+    EXPECT_FLOAT_EQ(out.reward_terms[task_column], spike);
+    if (spike > 0) {
+      ++spikes;
+      EXPECT_LE(spike, kFamilySpikeWeight);
+    }
+    ended = out.done[0];
+    if (ended) {
+      EXPECT_GT(out.fitness[0], 0.f);
+      EXPECT_LT(out.fitness[0], 1.1f);
+      EXPECT_FLOAT_EQ(out.ended_family_params[0], 1.2f);
+    }
+  }
+  EXPECT_TRUE(ended);
+  EXPECT_EQ(spikes, 1) << "one flight, one apex";
+}
+
+TEST(FamilyEnvTest, BadParameterRowsAreRefusedNamingThem) {
+  auto batch = EnvBatch::Create(FamilyConfig({{"gravity", 4, 14}}), Clip("deepmimic_jump"));
+  ASSERT_TRUE(batch.ok()) << batch.status();
+  absl::Status outside = (*batch)->SetFamilyParameters(std::vector<float>{5.f, 20.f});
+  EXPECT_EQ(outside.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(outside.message().find("row 1 gravity"), std::string::npos) << outside;
+  EXPECT_EQ((*batch)->SetFamilyParameters(std::vector<float>{5.f}).code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ((*batch)->SetFamilyParameters(std::vector<float>{5.f, NAN}).code(), absl::StatusCode::kInvalidArgument);
+  EnvBatchConfig tracking;
+  tracking.num_envs = 1;
+  auto plain = EnvBatch::Create(tracking, Clip("deepmimic_jump"));
+  ASSERT_TRUE(plain.ok());
+  EXPECT_EQ((*plain)->SetFamilyParameters(std::vector<float>{5.f}).code(), absl::StatusCode::kFailedPrecondition);
+}
+
+TEST(FamilyEnvTest, SessionsTheServerCannotRunAreRefused) {
+  auto two_clips = DefaultMotions()->Subset({"deepmimic_jump", "deepmimic_walk"});
+  ASSERT_TRUE(two_clips.ok());
+  auto batch = EnvBatch::Create(FamilyConfig({{"gravity", 4, 14}}), std::make_shared<const MotionLibrary>(*two_clips));
+  EXPECT_NE(batch.status().message().find("exactly one clip"), std::string::npos) << batch.status();
+  EnvBatchConfig absolute = FamilyConfig({{"gravity", 4, 14}});
+  absolute.env.action.mode = ActionMode::kAbsolute;
+  EXPECT_FALSE(EnvBatch::Create(absolute, Clip("deepmimic_jump")).ok());
+  auto scaled = EnvBatch::Create(FamilyConfig({{"leg_scale", 0.8, 1.2}}), Clip("deepmimic_walk"));
+  EXPECT_NE(scaled.status().message().find("leg_scale"), std::string::npos) << scaled.status();
+  auto inverted = EnvBatch::Create(FamilyConfig({{"gravity", 14, 4}}), Clip("deepmimic_walk"));
+  EXPECT_NE(inverted.status().message().find("inverted"), std::string::npos) << inverted.status();
+}
+
+}  // namespace
+}  // namespace modskill

@@ -1,0 +1,114 @@
+// The family trainer end to end against an in-process server: iterations run, episodes reach the
+// elite set with the server's fitness, progress.csv and the checkpoint are written, a resumed run
+// continues the counters and refuses another family; bad flags name themselves.
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "absl/strings/str_cat.h"
+#include "learner/family/family_trainer.h"
+#include "tests/server_fixture.h"
+
+namespace modskill::learner::family {
+namespace {
+
+FamilyTrainerConfig SmallFamily(const RunningServer& server, const std::string& run_dir) {
+  FamilyTrainerConfig config;
+  config.client.server = absl::StrCat("127.0.0.1:", server.port());
+  config.clip = "deepmimic_walk";
+  config.ranges = {{"gravity", 4, 14}};
+  config.run_dir = run_dir;
+  config.num_envs = 8;
+  config.horizon = 48;
+  config.epochs = 1;
+  config.minibatches = 2;
+  config.net_every = 1;
+  config.policy_hidden = {32};
+  config.value_hidden = {32};
+  config.curriculum.params_per_batch = 4;
+  config.curriculum.episodes_per_param = 1;
+  return config;
+}
+
+int CountLines(const std::string& path) {
+  std::ifstream in(path);
+  int lines = 0;
+  for (std::string line; std::getline(in, line);) ++lines;
+  return lines;
+}
+
+TEST(FamilyTrainerTest, TrainsWritesAndResumes) {
+  auto server = StartTestServer();
+  ASSERT_NE(server, nullptr);
+  const std::string run_dir = std::string(MODSKILL_TEST_TMP_DIR) + "/family_trainer";
+  std::filesystem::remove_all(run_dir);
+  FamilyTrainerConfig config = SmallFamily(*server, run_dir);
+  config.max_iterations = 2;
+  {
+    auto trainer = FamilyTrainer::Create(config);
+    ASSERT_TRUE(trainer.ok()) << trainer.status();
+    {
+      // An untrained policy falls before the walk's end; one that hurries through the clip (tau
+      // = 1: e frames a step) reaches it first, so its episodes are elite candidates.
+      torch::NoGradGuard no_grad;
+      (*trainer)->model()->named_parameters()["policy.2.bias"][69] = 1.0;
+    }
+    ASSERT_TRUE((*trainer)->Run([] { return false; }).ok());
+    EXPECT_EQ((*trainer)->env_steps(), 2 * 8 * 48);
+    // 96 steps of the 38-frame walk: episodes that reached the clip's end were offered.
+    EXPECT_GT((*trainer)->elites().size(), 0);
+    for (int64_t id : (*trainer)->elites().Ids()) {
+      const Elite& elite = (*trainer)->elites().elite(id);
+      EXPECT_GT(elite.fitness, 0.0);
+      EXPECT_EQ(elite.trajectory.size(1), 70);  // 69 displacements and tau
+    }
+  }
+  EXPECT_EQ(CountLines(run_dir + "/progress.csv"), 1 + 2);
+  EXPECT_TRUE(std::filesystem::exists(run_dir + "/checkpoint.pt"));
+  EXPECT_TRUE(std::filesystem::exists(run_dir + "/parameterization.pt"));
+
+  config.resume = true;
+  config.max_iterations = 1;
+  auto resumed = FamilyTrainer::Create(config);
+  ASSERT_TRUE(resumed.ok()) << resumed.status();
+  EXPECT_EQ((*resumed)->env_steps(), 2 * 8 * 48);
+  auto evaluated = (*resumed)->Evaluate({{4.0}, {14.0}});
+  ASSERT_TRUE(evaluated.ok()) << evaluated.status();
+  ASSERT_EQ(evaluated->size(), 2u);
+  EXPECT_EQ((*evaluated)[1].params, std::vector<double>{14.0});
+  for (const FamilyRolloutResult& episode : *evaluated) {
+    EXPECT_GT(episode.steps, 0);
+    EXPECT_GT(episode.apex_height, 0.5);  // the pelvis stands at about 0.9 m
+    EXPECT_GE(episode.flight_s, 0.0);
+  }
+  EXPECT_EQ((*resumed)->Evaluate({{20.0}}).status().code(), absl::StatusCode::kInvalidArgument);
+  ASSERT_TRUE((*resumed)->Run([] { return false; }).ok());
+  EXPECT_EQ(CountLines(run_dir + "/progress.csv"), 1 + 3);
+
+  FamilyTrainerConfig other = config;
+  other.ranges = {{"gravity", 5, 14}};
+  auto refused = FamilyTrainer::Create(other);
+  EXPECT_EQ(refused.status().code(), absl::StatusCode::kFailedPrecondition);
+  EXPECT_NE(refused.status().message().find("gravity=4:14"), std::string::npos) << refused.status();
+}
+
+TEST(FamilyTrainerTest, BadSettingsAreNamed) {
+  auto server = StartTestServer();
+  ASSERT_NE(server, nullptr);
+  FamilyTrainerConfig config = SmallFamily(*server, std::string(MODSKILL_TEST_TMP_DIR) + "/family_bad");
+  config.clip = "no_such_clip";
+  auto missing = FamilyTrainer::Create(config);
+  EXPECT_NE(missing.status().message().find("no_such_clip"), std::string::npos) << missing.status();
+  config = SmallFamily(*server, std::string(MODSKILL_TEST_TMP_DIR) + "/family_bad");
+  config.ranges = {{"leg_scale", 0.8, 1.2}};
+  auto not_offered = FamilyTrainer::Create(config);
+  EXPECT_NE(not_offered.status().message().find("leg_scale"), std::string::npos) << not_offered.status();
+  config = SmallFamily(*server, std::string(MODSKILL_TEST_TMP_DIR) + "/family_bad");
+  config.horizon = 1;
+  EXPECT_NE(FamilyTrainer::Create(config).status().message().find("--horizon"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace modskill::learner::family
