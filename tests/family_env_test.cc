@@ -162,6 +162,7 @@ TEST(FamilyEnvTest, JumpHeightPaysOneSpikeAtTheApexAndFitnessAtTheEnd) {
     const BatchBuffers& out = envs.buffers();
     const float spike = out.spike_reward[0];
     EXPECT_FLOAT_EQ(out.reward_terms[task_column], spike);
+    EXPECT_EQ(out.reward_terms[envs.spec().reward_terms.size() - 1], 0.f) << "no energy penalty in a family";
     if (spike > 0) {
       ++spikes;
       EXPECT_LE(spike, kFamilySpikeWeight);

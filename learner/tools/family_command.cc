@@ -58,7 +58,7 @@ bool FamilyRequested() { return !absl::GetFlag(FLAGS_family).empty(); }
 
 namespace {
 
-int Fail(const std::string& message, int code) {
+int FamilyFail(const std::string& message, int code) {
   LogLine("modskill-learner: %s", message);
   return code;
 }
@@ -114,9 +114,9 @@ absl::StatusOr<std::vector<std::vector<double>>> EvalPoints(const ParamSpace& sp
 
 int EvaluateFamily(family::FamilyTrainer& trainer, const std::string& run_dir) {
   auto points = EvalPoints(trainer.space());
-  if (!points.ok()) return Fail(std::string(points.status().message()), 2);
+  if (!points.ok()) return FamilyFail(std::string(points.status().message()), 2);
   auto results = trainer.Evaluate(*points);
-  if (!results.ok()) return Fail(std::string(results.status().message()), 1);
+  if (!results.ok()) return FamilyFail(std::string(results.status().message()), 1);
   std::vector<std::string> names;
   for (const ParamRange& range : trainer.space().ranges()) names.push_back(range.name);
   std::string csv = absl::StrCat(absl::StrJoin(names, ","), ",apex_height_m,flight_s,fitness,steps,reached_end\n");
@@ -126,7 +126,7 @@ int EvaluateFamily(family::FamilyTrainer& trainer, const std::string& run_dir) {
   }
   std::fputs(csv.c_str(), stdout);
   if (absl::Status status = WriteFileAtomically(run_dir + "/family_eval.csv", csv); !status.ok()) {
-    return Fail(std::string(status.message()), 1);
+    return FamilyFail(std::string(status.message()), 1);
   }
   return 0;
 }
@@ -135,23 +135,23 @@ int EvaluateFamily(family::FamilyTrainer& trainer, const std::string& run_dir) {
 
 int RunFamilyTraining(const std::string& token, const std::vector<std::string>& params, const std::atomic<bool>& stop) {
   auto config = FamilyConfigFromFlags(token, params);
-  if (!config.ok()) return Fail(std::string(config.status().message()), 2);
+  if (!config.ok()) return FamilyFail(std::string(config.status().message()), 2);
   auto trainer = family::FamilyTrainer::Create(*config);
   if (!trainer.ok()) {
     const bool bad_flag = trainer.status().code() == absl::StatusCode::kInvalidArgument;
-    return Fail(std::string(trainer.status().message()), bad_flag ? 2 : 1);
+    return FamilyFail(std::string(trainer.status().message()), bad_flag ? 2 : 1);
   }
   std::vector<std::string> shown;
   for (const ParamRange& range : config->ranges) shown.push_back(absl::StrCat(range.name, "=", range.lo, ":", range.hi));
   LogLine("training the family of %s over %s on %s, %d envs, run dir %s", config->clip, absl::StrJoin(shown, " "),
           config->client.server, config->num_envs, config->run_dir);
   absl::Status status = (*trainer)->Run([&stop] { return stop.load(); });
-  if (!status.ok()) return Fail(std::string(status.message()), 1);
+  if (!status.ok()) return FamilyFail(std::string(status.message()), 1);
   if (!absl::GetFlag(FLAGS_family_eval).empty()) {
     if (const int code = EvaluateFamily(**trainer, config->run_dir); code != 0) return code;
   }
   status = (*trainer)->Close();
-  if (!status.ok()) return Fail(std::string(status.message()), 1);
+  if (!status.ok()) return FamilyFail(std::string(status.message()), 1);
   return 0;
 }
 
