@@ -123,7 +123,12 @@ class FamilyTrainer {
     std::vector<float> phases;   // phase before each step
     std::vector<float> actions;  // [steps, A]: d clamped to [-1, 1], tau as log of the step taken
   };
+  // The last step result's fields, float32 ([N] or [N, ...]; flags as 0/1).
+  struct StepTensors {
+    torch::Tensor obs, reward, spike, phase_step, done, truncated, fitness, ended_params;
+  };
   explicit FamilyTrainer(FamilyTrainerConfig config);
+  absl::StatusOr<StepTensors> ReadResult() const;
   absl::Status Open();
   absl::Status Collect(Rollout* rollout, FamilyIterationStats* stats);
   void RecordStep(int env, const float* action, float phase_step);

@@ -9,14 +9,9 @@
 
 namespace modskill::learner::family {
 
-namespace {
-
-// The step's result fields as [N] float tensors.
-struct StepTensors {
-  torch::Tensor obs, reward, spike, phase_step, done, truncated, fitness, ended_params;
-};
-
-absl::StatusOr<StepTensors> ReadStep(const v1::StepResult& r, int64_t n, int64_t obs_size, int64_t dims) {
+absl::StatusOr<FamilyTrainer::StepTensors> FamilyTrainer::ReadResult() const {
+  const v1::StepResult& r = stream_->result();
+  const int64_t n = config_.num_envs, obs_size = obs_size_, dims = space_->dims();
   StepTensors t;
   struct Field {
     const v1::Tensor& wire;
@@ -41,8 +36,6 @@ absl::StatusOr<StepTensors> ReadStep(const v1::StepResult& r, int64_t n, int64_t
   return t;
 }
 
-}  // namespace
-
 void FamilyTrainer::RecordStep(int env, const float* action, float phase_step) {
   EnvEpisode& episode = episodes_[env];
   episode.phases.push_back(static_cast<float>(episode.phase));
@@ -66,7 +59,7 @@ absl::Status FamilyTrainer::Collect(Rollout* rollout, FamilyIterationStats* stat
     rollout->values.push_back(model_->Value(obs_));
     const torch::Tensor sent = actions.contiguous();
     if (absl::Status status = stream_->Step(sent.data_ptr<float>()); !status.ok()) return status;
-    auto step = ReadStep(stream_->result(), n, obs_size_, space_->dims());
+    auto step = ReadResult();
     if (!step.ok()) return step.status();
     rollout->rewards.push_back(step->reward);
     rollout->spikes.push_back(step->spike);

@@ -8,7 +8,6 @@
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "learner/family/family_trainer.h"
-#include "learner/wire_torch.h"
 
 namespace modskill::learner::family {
 namespace {
@@ -76,20 +75,16 @@ absl::StatusOr<std::vector<FamilyRolloutResult>> FamilyTrainer::Evaluate(const s
   for (int step = 0; step < max_steps; ++step) {
     const torch::Tensor actions = model_->Mean(obs_).contiguous();
     if (absl::Status status = stream_->Step(actions.data_ptr<float>()); !status.ok()) return status;
-    const v1::StepResult& result = stream_->result();
-    auto obs = WireToTorch(result.obs(), "StepResult.obs", v1::FLOAT32, {config_.num_envs, obs_size_});
-    auto done = WireToTorch(result.done(), "StepResult.done", v1::UINT8, {config_.num_envs});
-    auto truncated = WireToTorch(result.truncated(), "StepResult.truncated", v1::UINT8, {config_.num_envs});
-    auto fitness = WireToTorch(result.fitness(), "StepResult.fitness", v1::FLOAT32, {config_.num_envs});
-    if (!obs.ok() || !done.ok() || !truncated.ok() || !fitness.ok()) return absl::DataLossError("family eval: step result");
-    obs_ = *obs;
+    auto result = ReadResult();
+    if (!result.ok()) return result.status();
+    obs_ = result->obs;
     bool all_done = true;
     for (int i = 0; i < config_.num_envs; ++i) {
       Watch& w = watches[i];
-      const bool ended = done->index({i}).item<float>() != 0;
+      const bool ended = result->done[i].item<float>() != 0;
       if (w.stage == 1 && ended) {
-        w.result = {w.result.params, w.apex, w.flight_steps * dt, fitness->index({i}).item<float>(), w.steps + 1,
-                    truncated->index({i}).item<float>() != 0};
+        w.result = {w.result.params, w.apex, w.flight_steps * dt, result->fitness[i].item<float>(), w.steps + 1,
+                    result->truncated[i].item<float>() != 0};
         w.stage = 2;
       } else if (w.stage == 1) {
         ++w.steps;

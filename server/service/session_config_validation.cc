@@ -66,16 +66,11 @@ absl::StatusOr<std::vector<ParamRange>> ToFamilyRanges(const v1::SessionConfig& 
   for (const v1::FamilyParameterRange& wire : config.family().params()) {
     ranges.push_back(ParamRange{wire.name(), wire.lo(), wire.hi()});
   }
-  if (absl::Status status = ValidateFamilyRanges(ranges, "family.params"); !status.ok()) return status;
-  if (config.motions_size() != 1) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("family: needs exactly one clip in motions, got ", config.motions_size()));
+  if (absl::Status status = ValidateFamilySession(ranges, "family.params", config.motions_size(), task, action_mode,
+                                                  config.loop_clips());
+      !status.ok()) {
+    return status;
   }
-  if (task != TaskKind::kTracking) return absl::InvalidArgumentError("family: a family session's task is tracking");
-  if (action_mode != ActionMode::kResidual) {
-    return absl::InvalidArgumentError("family: action_mode must be RESIDUAL (a displacement of the reference)");
-  }
-  if (config.loop_clips()) return absl::InvalidArgumentError("family: loop_clips is not for a family session");
   return ranges;
 }
 

@@ -61,12 +61,10 @@ absl::StatusOr<std::shared_ptr<const HumanoidModel>> ModelForTask(std::shared_pt
 // A family session: one clip, tracking, residual actions; its context and spec.
 absl::Status SetUpFamily(EnvContext& context, EnvSpec* spec) {
   const TrackingEnvConfig& env = context.config;
-  if (env.task != TaskKind::kTracking) return absl::InvalidArgumentError("family: a family session tracks (task tracking)");
-  if (env.action.mode != ActionMode::kResidual) return absl::InvalidArgumentError("family: needs action_mode RESIDUAL");
-  if (env.loop_clips) return absl::InvalidArgumentError("family: loop_clips is not for a family session");
-  if (context.motions->size() != 1) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("family: needs exactly one clip in motions, got ", context.motions->size()));
+  if (absl::Status status = ValidateFamilySession(env.family, "family", context.motions->size(), env.task,
+                                                  env.action.mode, env.loop_clips);
+      !status.ok()) {
+    return status;
   }
   auto family = MakeFamilyContext(env.family, *context.humanoid, context.motions->clip(0));
   if (!family.ok()) return family.status();

@@ -87,10 +87,21 @@ bool FamilyNeedsObstacle(absl::Span<const ParamRange> ranges) {
   });
 }
 
+absl::Status ValidateFamilySession(absl::Span<const ParamRange> ranges, absl::string_view ranges_field, int clips,
+                                   TaskKind task, ActionMode action_mode, bool loop_clips) {
+  if (absl::Status status = ValidateFamilyRanges(ranges, ranges_field); !status.ok()) return status;
+  if (clips != 1) return absl::InvalidArgumentError(absl::StrCat("family: needs exactly one clip in motions, got ", clips));
+  if (task != TaskKind::kTracking) return absl::InvalidArgumentError("family: a family session's task is tracking");
+  if (action_mode != ActionMode::kResidual) {
+    return absl::InvalidArgumentError("family: action_mode must be RESIDUAL (a displacement of the reference)");
+  }
+  if (loop_clips) return absl::InvalidArgumentError("family: loop_clips is not for a family session");
+  return absl::OkStatus();
+}
+
 absl::StatusOr<std::shared_ptr<const FamilyContext>> MakeFamilyContext(std::vector<ParamRange> ranges,
                                                                        const HumanoidModel& humanoid,
                                                                        const MotionClip& clip) {
-  if (absl::Status valid = ValidateFamilyRanges(ranges, "family"); !valid.ok()) return valid;
   auto family = std::make_shared<FamilyContext>();
   family->gravity = IndexOf(ranges, "gravity");
   family->body_mass_scale = IndexOf(ranges, "body_mass_scale");

@@ -27,6 +27,7 @@
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "absl/types/span.h"
+#include "common/policy/action_mode.h"
 #include "common/policy/family_fitness.h"
 #include "common/policy/family_parameters.h"
 #include "server/core/env/env_spec.h"
@@ -66,9 +67,14 @@ absl::Status ValidateFamilyRanges(absl::Span<const ParamRange> ranges, absl::str
 // The catalog entries this server offers (Describe).
 std::vector<FamilyParameterInfo> OfferedFamilyParameters();
 bool FamilyNeedsObstacle(absl::Span<const ParamRange> ranges);
+// Everything a family session needs besides its clip's content, checked once for the service's
+// SessionConfig and for EnvBatch: ValidateFamilyRanges under `ranges_field`, exactly one clip,
+// task tracking, residual actions, no looping. INVALID_ARGUMENT naming the field.
+absl::Status ValidateFamilySession(absl::Span<const ParamRange> ranges, absl::string_view ranges_field, int clips,
+                                   TaskKind task, ActionMode action_mode, bool loop_clips);
 
-// The context of a family session over its one clip; `model` must hold the obstacle geom when
-// FamilyNeedsObstacle.
+// The context of a family session over its one clip (ranges checked: ValidateFamilySession);
+// `model` must hold the obstacle geom when FamilyNeedsObstacle.
 absl::StatusOr<std::shared_ptr<const FamilyContext>> MakeFamilyContext(std::vector<ParamRange> ranges,
                                                                        const HumanoidModel& humanoid,
                                                                        const MotionClip& clip);

@@ -158,14 +158,17 @@ void TrackingEnv::EndOnBlowUp(EnvRow row) {
 }
 
 TrackingErrors TrackingEnv::ScoreTracking(float* terms, EnvRow row) {
-  BatchBuffers& out = *row.buffers;
-  const int i = row.index;
   TrackingErrors errors = CurrentTrackingTerms(terms);
   if (context_->spec->task == TaskKind::kVrTracking) errors = VrErrors();
-  out.max_body_error[i] = static_cast<float>(errors.max_body_distance);
-  out.mean_body_error[i] = static_cast<float>(errors.mean_body_distance);
-  WritePartErrors(&out.part_error[static_cast<size_t>(i) * out.widths.parts]);
+  WriteErrors(errors, row);
   return errors;
+}
+
+void TrackingEnv::WriteErrors(const TrackingErrors& errors, EnvRow row) const {
+  BatchBuffers& out = *row.buffers;
+  out.max_body_error[row.index] = static_cast<float>(errors.max_body_distance);
+  out.mean_body_error[row.index] = static_cast<float>(errors.mean_body_distance);
+  WritePartErrors(&out.part_error[static_cast<size_t>(row.index) * out.widths.parts]);
 }
 
 TrackingErrors TrackingEnv::VrErrors() const {

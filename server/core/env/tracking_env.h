@@ -143,6 +143,8 @@ class TrackingEnv {
   PlanarMotion LoopMotionOf(int frame) const;
   // Errors over the VR bodies only (VR tracking's success and errors).
   TrackingErrors VrErrors() const;
+  // The row's max, mean and per-part body errors (body_distance_ holds this step's distances).
+  void WriteErrors(const TrackingErrors& errors, EnvRow row) const;
   // Mean body distance per part of the layout between sim_ and reference_ (one float per part).
   void WritePartErrors(float* part_error) const;
   bool PhysicsDiverged() const;

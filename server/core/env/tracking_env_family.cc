@@ -42,9 +42,7 @@ void TrackingEnv::StepFamily(const float* action, EnvRow row) {
   ReadSimulatedState(*context_->humanoid, data_, &sim_);
   const TrackingErrors errors =
       ComputeImitationTerms(config.reward, sim_, reference_, terms, body_distance_.data());
-  out.max_body_error[i] = static_cast<float>(errors.max_body_distance);
-  out.mean_body_error[i] = static_cast<float>(errors.mean_body_distance);
-  WritePartErrors(&out.part_error[static_cast<size_t>(i) * out.widths.parts]);
+  WriteErrors(errors, row);
   const FamilyStepScore score = family_->Score(sim_, reference_, data_, phase_step);
   terms[kTimeColumn] = score.time_reward;
   terms[kTaskColumn] = score.spike;
