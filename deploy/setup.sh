@@ -20,6 +20,7 @@ PACKAGES=(
   libjs-three  # three.js, inlined into the HTML viewer pages (common/viewer)
   chromium     # tests/viewer: the viewer page in headless Chromium
   python3-yaml  # tests/k8s: deploy/k8s/check_manifests.py reads the Kubernetes manifests
+  iproute2  # tests/netns: server and learner hosts as network namespaces (ip netns, veth, tc)
 )
 
 missing=()

@@ -33,6 +33,12 @@ absl::StatusOr<std::unique_ptr<SimulationClient>> SimulationClient::Connect(cons
   arguments.SetMaxSendMessageSize(static_cast<int>(std::min<int64_t>(options.max_message_bytes, INT32_MAX)));
   // Large step results flow without waiting for HTTP/2 window updates.
   arguments.SetInt(GRPC_ARG_HTTP2_STREAM_LOOKAHEAD_BYTES, 64 << 20);
+  // A server behind a cut link or a dead host sends nothing, not even a reset: without pings a
+  // stream read would wait for TCP's own timeout (~15 minutes). The server permits a ping a second.
+  arguments.SetInt(GRPC_ARG_KEEPALIVE_TIME_MS, static_cast<int>(absl::ToInt64Milliseconds(options.keepalive_time)));
+  arguments.SetInt(GRPC_ARG_KEEPALIVE_TIMEOUT_MS, static_cast<int>(absl::ToInt64Milliseconds(options.keepalive_timeout)));
+  arguments.SetInt(GRPC_ARG_KEEPALIVE_PERMIT_WITHOUT_CALLS, 1);
+  arguments.SetInt(GRPC_ARG_HTTP2_MAX_PINGS_WITHOUT_DATA, 0);
   std::unique_ptr<SimulationClient> client(new SimulationClient(options));
   client->channel_ = grpc::CreateCustomChannel(options.server, credentials, arguments);
   if (!client->channel_->WaitForConnected(absl::ToChronoTime(absl::Now() + options.connect_timeout))) {

@@ -23,6 +23,10 @@ struct ClientOptions {
   std::string tls_server_name;  // override the name checked in the server certificate
   int64_t max_message_bytes = int64_t{512} << 20;
   absl::Duration connect_timeout = absl::Seconds(10);
+  // HTTP/2 pings: a server that stops answering them within keepalive_timeout is declared lost
+  // (UNAVAILABLE), so a cut link ends a stream read within keepalive_time + keepalive_timeout.
+  absl::Duration keepalive_time = absl::Seconds(5);
+  absl::Duration keepalive_timeout = absl::Seconds(5);
 };
 
 // Reads a token file (whitespace stripped).
