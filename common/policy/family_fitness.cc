@@ -20,7 +20,7 @@ absl::Status CheckMeasure(const char* name, double value) {
 absl::Status FitnessAccumulator::AddFrame(const FitnessFrame& frame) {
   if (absl::Status s = CheckMeasure("pose_error", frame.pose_error); !s.ok()) return s;
   if (absl::Status s = CheckMeasure("velocity_error", frame.velocity_error); !s.ok()) return s;
-  if (absl::Status s = CheckMeasure("contact_mismatches", frame.contact_mismatches); !s.ok()) return s;
+  if (absl::Status s = CheckMeasure("contact_error", frame.contact_error); !s.ok()) return s;
   double drag = 0;
   for (double speed : frame.contact_foot_speeds) {
     if (absl::Status s = CheckMeasure("contact_foot_speeds", speed); !s.ok()) return s;
@@ -28,7 +28,7 @@ absl::Status FitnessAccumulator::AddFrame(const FitnessFrame& frame) {
   }
   pose_ += frame.pose_error;
   velocity_ += frame.velocity_error;
-  contact_ += frame.contact_mismatches;
+  contact_ += frame.contact_error;
   drag_ += drag;
   ++frames_;
   return absl::OkStatus();

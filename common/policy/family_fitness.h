@@ -5,10 +5,12 @@
 // V = 0.5 but not the terms' forms. Our reading, stated once here:
 //   f_x = exp(-e_x / sigma_x), e_x the per-frame mean of the error x over the episode (a mean,
 //   so that a time warp that lengthens the episode is not punished for its length);
-//   pose:     sum over joints of |q_j (-) q^_j|^2, rad^2 (rotation angle between simulated and
-//             reference joint rotation, the reference at the warped phase);
-//   velocity: sum over joints of |w_j - w^_j|^2, (rad/s)^2 (hence sigma 75.5);
-//   contact:  number of feet whose ground contact differs from the reference's;
+//   pose:     mean over the hinges of (q_h - q^_h)^2, rad^2 (the reference at the warped phase);
+//   velocity: mean over the hinges of (w_h - w^_h)^2, (rad/s)^2 (hence sigma 75.5);
+//   (means over the degrees of freedom, not sums, as in the authors' public code: a sum over our
+//   69 hinges put F near 0 for every motion);
+//   contact:  sum over the feet on the floor in the simulation or the reference of
+//             (5 (z_foot - z^_foot))^2, m^2 (the authors' code's graded form);
 //   drag:     sum over feet in contact of max(0, |v_foot,horizontal| - V), m/s: a planted foot
 //             may slip up to V = 0.5 m/s before it counts as dragged;
 //   r_constraint in [0, 1]: how well the episode met its parameter's constraint (the task's own
@@ -35,7 +37,7 @@ struct FitnessConstants {
 struct FitnessFrame {
   double pose_error = 0;
   double velocity_error = 0;
-  double contact_mismatches = 0;
+  double contact_error = 0;
   absl::Span<const double> contact_foot_speeds;  // horizontal speed of each foot in contact, m/s
 };
 

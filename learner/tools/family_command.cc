@@ -119,10 +119,11 @@ int EvaluateFamily(family::FamilyTrainer& trainer, const std::string& run_dir) {
   if (!results.ok()) return FamilyFail(std::string(results.status().message()), 1);
   std::vector<std::string> names;
   for (const ParamRange& range : trainer.space().ranges()) names.push_back(range.name);
-  std::string csv = absl::StrCat(absl::StrJoin(names, ","), ",apex_height_m,flight_s,fitness,steps,reached_end\n");
+  std::string csv = absl::StrCat(absl::StrJoin(names, ","), ",apex_height_m,highest_body_m,flight_s,fitness,steps,reached_end\n");
   for (const family::FamilyRolloutResult& r : *results) {
-    absl::StrAppend(&csv, absl::StrJoin(r.params, ","), absl::StrFormat(",%.4f,%.4f,%.4f,%d,%d\n", r.apex_height,
-                                                                          r.flight_s, r.fitness, r.steps, r.reached_end));
+    absl::StrAppend(&csv, absl::StrJoin(r.params, ","), absl::StrFormat(",%.4f,%.4f,%.4f,%.4f,%d,%d\n", r.apex_height,
+                                                                          r.highest_body, r.flight_s, r.fitness, r.steps,
+                                                                          r.reached_end));
   }
   std::fputs(csv.c_str(), stdout);
   if (absl::Status status = WriteFileAtomically(run_dir + "/family_eval.csv", csv); !status.ok()) {
