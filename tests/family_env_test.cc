@@ -134,6 +134,31 @@ TEST(FamilyEnvTest, ParametersReachTheEnvsOwnModel) {
   EXPECT_NEAR(envs.buffers().family_params[0], 5.f, 1e-6);
 }
 
+TEST(FamilyEnvTest, JointsHaveThePapersTorqueLimitsByGroupScaledByMass) {
+  auto batch = EnvBatch::Create(FamilyConfig({{"gravity", 9.81, 9.81}}, 1), Clip("deepmimic_jump"));
+  ASSERT_TRUE(batch.ok()) << batch.status();
+  EnvBatch& envs = **batch;
+  const mjModel* own = envs.env(0).family()->model();
+  const mjModel* shared = envs.humanoid().model();
+  const double scale = mj_getTotalmass(shared) / 61.7;  // Lee et al.'s character weighs 61.7 kg
+  auto limit = [&](const mjModel* m, const std::string& actuator) {
+    const int a = mj_name2id(m, mjOBJ_ACTUATOR, actuator.c_str());
+    EXPECT_GE(a, 0) << actuator;
+    return a < 0 ? 0.0 : m->actuator_forcerange[2 * a + 1];
+  };
+  EXPECT_NEAR(limit(own, "L_Hip_x"), 200 * scale, 1e-9);
+  EXPECT_NEAR(limit(own, "R_Knee_y"), 150 * scale, 1e-9);
+  EXPECT_NEAR(limit(own, "L_Ankle_z"), 90 * scale, 1e-9);
+  EXPECT_NEAR(limit(own, "Neck_x"), 50 * scale, 1e-9);
+  EXPECT_NEAR(limit(own, "R_Shoulder_x"), 100 * scale, 1e-9);
+  EXPECT_NEAR(limit(own, "L_Elbow_y"), 60 * scale, 1e-9);
+  EXPECT_NEAR(limit(shared, "L_Hip_x"), 500, 1e-9) << "tracking sessions keep PHC's limits";
+  // The same numbers reach stable PD, hinge by hinge.
+  const std::vector<double>& hinges = envs.env(0).family()->torque_limits();
+  ASSERT_EQ(static_cast<int>(hinges.size()), own->nu);
+  for (int a = 0; a < own->nu; ++a) EXPECT_DOUBLE_EQ(hinges[a], own->actuator_forcerange[2 * a + 1]) << a;
+}
+
 TEST(FamilyEnvTest, LowerGravityJumpsHigher) {
   auto batch = EnvBatch::Create(FamilyConfig({{"gravity", 4, 14}}, 1), Clip("deepmimic_jump"));
   ASSERT_TRUE(batch.ok()) << batch.status();

@@ -51,9 +51,10 @@ TEST(FamilyTrainerTest, TrainsWritesAndResumes) {
     ASSERT_TRUE(trainer.ok()) << trainer.status();
     {
       // An untrained policy falls before the walk's end; one that hurries through the clip (tau
-      // = 1: e frames a step) reaches it first, so its episodes are elite candidates.
+      // = 0.25: 1.45 frames a step) reaches it first, so its episodes are elite candidates. (At
+      // tau = 1, e frames a step, the paper's torque limits no longer carry the walk to its end.)
       torch::NoGradGuard no_grad;
-      (*trainer)->model()->named_parameters()["policy.2.bias"][69] = 1.0;
+      (*trainer)->model()->named_parameters()["policy.2.bias"][69] = 0.25;
     }
     ASSERT_TRUE((*trainer)->Run([] { return false; }).ok());
     EXPECT_EQ((*trainer)->env_steps(), 2 * 8 * 48);

@@ -25,8 +25,10 @@ struct ClientOptions {
   absl::Duration connect_timeout = absl::Seconds(10);
   // HTTP/2 pings: a server that stops answering them within keepalive_timeout is declared lost
   // (UNAVAILABLE), so a cut link ends a stream read within keepalive_time + keepalive_timeout.
-  absl::Duration keepalive_time = absl::Seconds(5);
-  absl::Duration keepalive_timeout = absl::Seconds(5);
+  // Not shorter: at 5 s + 5 s a learner on a machine loaded with builds lost a live server
+  // ("keepalive watchdog timeout" after a 12 s stall). The server's own pings use 10 s + 20 s.
+  absl::Duration keepalive_time = absl::Seconds(10);
+  absl::Duration keepalive_timeout = absl::Seconds(20);
 };
 
 // Reads a token file (whitespace stripped).

@@ -11,7 +11,8 @@
 //   69 hinges put F near 0 for every motion);
 //   contact:  sum over the feet on the floor in the simulation or the reference of
 //             (5 (z_foot - z^_foot))^2, m^2 (the authors' code's graded form);
-//   drag:     sum over feet in contact of max(0, |v_foot,horizontal| - V), m/s: a planted foot
+//   drag:     sum over feet in contact at both ends of the control step of max(0, v - V), m/s,
+//             v the foot's horizontal displacement over the step / its duration: a planted foot
 //             may slip up to V = 0.5 m/s before it counts as dragged;
 //   r_constraint in [0, 1]: how well the episode met its parameter's constraint (the task's own
 //             measure, e.g. exp of the jump height's error), weighted 0.1.

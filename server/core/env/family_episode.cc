@@ -6,6 +6,7 @@
 #include <string>
 #include <utility>
 
+#include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "server/core/sim/mjcf_builder.h"
 #include "server/core/sim/rotation_math.h"
@@ -52,7 +53,30 @@ void MeasureClip(const MotionClip& clip, FamilyContext* family) {
   for (int foot : family->feet) family->foot_contact_height.push_back(clip.body_pos[foot].z() + 0.03);
 }
 
+// Lee et al. 2021, Table 3: the torque limit (N*m) of each joint group of their 61.7 kg character,
+// scaled here by our character's mass over theirs so that strength per kilogram is theirs. It bounds
+// each of a joint's three hinges (their limit bounds the norm of the joint's torque vector).
+constexpr double kPaperCharacterMass = 61.7;  // kg
+double PaperTorqueLimit(absl::string_view body) {
+  auto has = [&](absl::string_view s) { return absl::StrContains(body, s); };
+  if (has("Hip") || has("Torso")) return 200;
+  if (has("Knee")) return 150;
+  if (has("Ankle")) return 90;
+  if (has("Neck") || has("Head")) return 50;
+  if (has("Elbow") || has("Wrist") || has("Hand") || has("Toe")) return 60;
+  return 100;  // Spine, Chest, Thorax, Shoulder
+}
+
 }  // namespace
+
+std::vector<double> FamilyTorqueLimits(const HumanoidSpec& spec, double character_mass) {
+  std::vector<double> limits;
+  for (int b = 1; b < spec.num_bodies(); ++b) {
+    const double limit = PaperTorqueLimit(spec.body(b).name) * character_mass / kPaperCharacterMass;
+    limits.insert(limits.end(), 3, limit);
+  }
+  return limits;
+}
 
 absl::Status ValidateFamilyRanges(absl::Span<const ParamRange> ranges, absl::string_view field) {
   if (ranges.empty()) return absl::InvalidArgumentError(absl::StrCat(field, ": no parameter ranges"));
@@ -118,6 +142,12 @@ absl::StatusOr<std::shared_ptr<const FamilyContext>> MakeFamilyContext(std::vect
   for (int g = 0; g < model->ngeom; ++g) family->humanoid_geom[g] = model->geom_bodyid[g] != 0;
   const HumanoidSpec& spec = humanoid.spec();
   family->feet = FootBodies(spec);
+  // A family model holds the humanoid and static geoms only (the obstacle is the world's).
+  family->hinge_torque_limit = FamilyTorqueLimits(spec, mj_getTotalmass(model));
+  family->control_dt = model->opt.timestep * humanoid.options().substeps;
+  if (static_cast<int>(family->hinge_torque_limit.size()) != humanoid.num_hinges()) {
+    return absl::InternalError("family: torque limits do not match the hinges");
+  }
   for (const char* name : kEffectorBodies) family->effectors.push_back(spec.BodyIndex(name));
   family->ranges = std::move(ranges);
   MeasureClip(clip, family.get());
@@ -139,9 +169,20 @@ double PhaseStep(float tau) { return std::exp(std::clamp(1.5 * static_cast<doubl
 
 FamilyEpisode::FamilyEpisode(const FamilyContext* family, const mjModel* base)
     : family_(family), base_(base), model_(mj_copyModel(nullptr, base)) {
+  // Position servos (one per hinge, in hinge order) clamp to the paper's limits; stable PD reads
+  // them through PdController::UseTorqueLimits.
+  if (model_->nu == static_cast<int>(family->hinge_torque_limit.size())) {
+    for (int a = 0; a < model_->nu; ++a) {
+      model_->actuator_forcelimited[a] = 1;
+      model_->actuator_forcerange[2 * a] = -family->hinge_torque_limit[a];
+      model_->actuator_forcerange[2 * a + 1] = family->hinge_torque_limit[a];
+    }
+  }
   a_.assign(family->ranges.size(), 0.f);
   next_.assign(family->ranges.size(), 0.f);
   foot_speeds_.reserve(family->feet.size());
+  prev_foot_pos_.assign(family->feet.size(), Vec3::Zero());
+  prev_foot_contact_.assign(family->feet.size(), 0);
 }
 
 FamilyEpisode::~FamilyEpisode() { mj_deleteModel(model_); }
@@ -163,6 +204,7 @@ void FamilyEpisode::Begin(const MotionClip& clip, int frame, std::mt19937_64& rn
   ApplyToModel(clip);
   phase_ = frame;
   prev_root_vz_ = prev_effector_vz_ = 0;
+  std::fill(prev_foot_contact_.begin(), prev_foot_contact_.end(), 0);
   jump_scored_ = target_scored_ = touched_obstacle_ = false;
   r_jump_ = r_target_ = 0;
   fitness_ = FitnessAccumulator();
@@ -266,7 +308,16 @@ void FamilyEpisode::AddFitnessFrame(const HumanoidState& sim, const HumanoidStat
       const double dz = 5.0 * (sim.body_pos[body].z() - reference.body_pos[body].z());
       frame.contact_error += dz * dz;
     }
-    if (sim_contact) foot_speeds_.push_back(std::hypot(sim.body_vel[body].x(), sim.body_vel[body].y()));
+    // Drag: how fast a foot on the floor at both ends of the control step moved over it (the
+    // authors' code measures the same displacement); the instantaneous speed of a planted foot
+    // jitters above V under a little action noise and put f_drag at 0.4 for a jump that held.
+    const Vec3& p = sim.body_pos[body];
+    if (sim_contact && prev_foot_contact_[f]) {
+      foot_speeds_.push_back(std::hypot(p.x() - prev_foot_pos_[f].x(), p.y() - prev_foot_pos_[f].y()) /
+                             family_->control_dt);
+    }
+    prev_foot_pos_[f] = p;
+    prev_foot_contact_[f] = sim_contact;
   }
   frame.contact_foot_speeds = foot_speeds_;
   // A blow-up ends the episode before this; a measure is never negative, so this cannot fail.

@@ -53,11 +53,14 @@ struct FamilyContext {
   int obstacle_geom = -1;               // MuJoCo geom id; -1 without obstacle parameters
   std::vector<char> humanoid_geom;      // per MuJoCo geom: a body of the humanoid's
   std::vector<int> feet;                // spec body indices
+  // Per hinge, N*m: the paper's torque limits by joint group (FamilyTorqueLimit).
+  std::vector<double> hinge_torque_limit;
   std::vector<double> foot_contact_height;  // per foot: in contact below it (the clip's start + 3 cm)
   std::vector<int> effectors;           // ankles and wrists, spec body indices
   double root_start_height = 0, root_apex_height = 0;  // the clip's
   double effector_start_height = 0, effector_peak_height = 0;
   double travel = 0;                    // m, horizontal root displacement over the clip
+  double control_dt = 0;                // s, one control step (the physics substeps it holds)
 };
 
 // The ranges this server can run: the catalog's checks (ValidateParamRange), no name twice, and
@@ -83,6 +86,10 @@ absl::StatusOr<std::shared_ptr<const FamilyContext>> MakeFamilyContext(std::vect
 // action (the time warp, last), and the reward terms pos, rot, vel, ang_vel, time, task, energy.
 void AddFamilyToSpec(const std::vector<ParamRange>& ranges, EnvSpec* spec);
 
+// Per hinge (spec order), N*m: Lee et al.'s Table 3 limits by joint group, scaled by
+// character_mass (kg) over their character's 61.7 kg.
+std::vector<double> FamilyTorqueLimits(const HumanoidSpec& spec, double character_mass);
+
 // The time warp of the paper's code: the phase advances exp(clip(1.5 tau, -2, 1)) frames.
 double PhaseStep(float tau);
 
@@ -100,6 +107,7 @@ class FamilyEpisode {
   FamilyEpisode& operator=(const FamilyEpisode&) = delete;
 
   const mjModel* model() const { return model_; }
+  const std::vector<double>& torque_limits() const { return family_->hinge_torque_limit; }
   // The next episode's a (one value per range, inside it: EnvBatch::SetFamilyParameters checks).
   void SetNext(const float* a);
   // Starts an episode on `clip` at `frame`: a is the pending SetNext row or a uniform draw.
@@ -136,6 +144,8 @@ class FamilyEpisode {
   double r_jump_ = 0, r_target_ = 0;
   FitnessAccumulator fitness_;
   std::vector<double> foot_speeds_;  // scratch: speeds of the feet in contact
+  std::vector<Vec3> prev_foot_pos_;   // per foot, at the previous control step
+  std::vector<char> prev_foot_contact_;
 };
 
 }  // namespace modskill

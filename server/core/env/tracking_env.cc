@@ -25,6 +25,7 @@ TrackingEnv::TrackingEnv(const EnvContext* context, uint64_t seed)
   if (context->family != nullptr) {
     family_ = std::make_unique<FamilyEpisode>(context->family.get(), context->humanoid->model());
     pd_.UseModel(family_->model());
+    pd_.UseTorqueLimits(&family_->torque_limits());
   }
 }
 

@@ -47,7 +47,7 @@ double PdController::StepStablePd(const double* targets, mjData* data) {
   const double dt = m->opt.timestep;
   const std::vector<double>& kp = humanoid_.kp();
   const std::vector<double>& kd = humanoid_.kd();
-  const std::vector<double>& limit = humanoid_.torque_limit();
+  const std::vector<double>& limit = torque_limits_ != nullptr ? *torque_limits_ : humanoid_.torque_limit();
   double power = 0;
   const int substeps = humanoid_.options().substeps;
   for (int s = 0; s < substeps; ++s) {

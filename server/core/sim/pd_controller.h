@@ -23,6 +23,10 @@ class PdController {
   // Steps `model` from now on instead of the humanoid's own: a copy with the same sizes whose
   // physics (gravity, masses, an obstacle) one env changes (family_episode.h).
   void UseModel(const mjModel* model) { model_ = model; }
+  // Stable PD clamps each hinge's torque to `limits` (one per hinge, N*m; it must outlive the
+  // controller) instead of the humanoid's. Position servos take theirs from the model's
+  // actuator_forcerange, which a model given to UseModel carries.
+  void UseTorqueLimits(const std::vector<double>* limits) { torque_limits_ = limits; }
 
  private:
   double StepPositionImplicit(const double* targets, mjData* data);
@@ -30,6 +34,7 @@ class PdController {
 
   const HumanoidModel& humanoid_;
   const mjModel* model_;
+  const std::vector<double>* torque_limits_ = nullptr;
   std::vector<mjtNum> dense_mass_;
   Eigen::MatrixXd system_;
   Eigen::VectorXd rhs_, acceleration_;
