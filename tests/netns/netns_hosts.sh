@@ -24,6 +24,11 @@ netns_check() {
   if ! command -v ip > /dev/null; then echo "no 'ip' command (Debian package iproute2)"; return 1; fi
   local probe="${NETNS_TAG}probe" why
   if ! why=$(ip netns add "$probe" 2>&1); then echo "cannot create a network namespace: $why"; return 1; fi
+  if ! why=$(ip netns exec "$probe" ip link set lo up 2>&1); then  # e.g. no right to remount /sys
+    ip netns del "$probe"
+    echo "cannot run a command in a network namespace: $why"
+    return 1
+  fi
   if ! why=$(ip link add "${NETNS_TAG}p0" type veth peer name "${NETNS_TAG}p1" 2>&1); then
     ip netns del "$probe"
     echo "cannot create a veth pair: $why"
