@@ -13,7 +13,7 @@
 namespace modskill::learner::family {
 
 struct CoverageConfig {
-  double acceptance = 0.5;  // F an elite needs to count
+  double acceptance = 0.1;  // F an elite needs to count (the authors' code admits no elite below 0.1)
   double radius = 0.1;      // normalized units
   int probes = 256;         // evenly spaced with one free dimension, uniform draws with more
   uint64_t seed = 7;        // the draws: the same probes every time

@@ -78,7 +78,7 @@ struct FamilyIterationStats {
 struct FamilyRolloutResult {
   std::vector<double> params;  // a, in the parameters' units
   double apex_height = 0;      // m, the root's highest
-  double highest_body = 0;     // m, the highest any other body got (a kick's foot, a punch's hand)
+  double highest_effector = 0;  // m, the highest an ankle, toe, wrist or hand got (a kick's foot)
   double flight_s = 0;         // s with every foot above its starting height + 3 cm
   double fitness = 0;          // F, the server's
   int steps = 0;

@@ -1,6 +1,6 @@
 // FamilyTrainer::Evaluate: the policy's mean actions at chosen parameters, and what the motion
-// did physically (the root's apex, the highest any body got, e.g. a kicking foot, the time with
-// every foot off the floor), read from the
+// did physically (the root's apex, the highest an end effector got, e.g. a kicking foot, the
+// time with every foot off the floor), read from the
 // observation's self features (root height; each body's position relative to the root, whose z
 // the heading frame keeps).
 #include <algorithm>
@@ -17,7 +17,7 @@ namespace {
 struct HeightIndices {
   int root = -1;
   std::vector<int> feet;
-  std::vector<int> bodies;  // every other body's
+  std::vector<int> effectors;  // ankles, toes, wrists, hands
 };
 
 HeightIndices FindHeights(const v1::EnvSpec& spec) {
@@ -25,10 +25,9 @@ HeightIndices FindHeights(const v1::EnvSpec& spec) {
   for (const v1::BodyPart& part : spec.parts()) {
     for (int k = 0; k < part.bodies_size() && k < part.self_obs_size(); ++k) {
       const std::string& body = part.bodies(k);
-      if (body == spec.body_names(0)) {
-        indices.root = part.self_obs(k).start();
-      } else {
-        indices.bodies.push_back(part.self_obs(k).start() + 2);  // local z
+      if (body == spec.body_names(0)) indices.root = part.self_obs(k).start();
+      for (const char* effector : {"Ankle", "Toe", "Wrist", "Hand"}) {
+        if (absl::StrContains(body, effector)) indices.effectors.push_back(part.self_obs(k).start() + 2);  // local z
       }
       if (absl::StrContains(body, "Ankle") || absl::StrContains(body, "Toe")) {
         indices.feet.push_back(part.self_obs(k).start() + 2);  // local z
@@ -41,7 +40,7 @@ HeightIndices FindHeights(const v1::EnvSpec& spec) {
 // One env's evaluated episode: waiting for the episode it was in to end, recording, done.
 struct Watch {
   int stage = 0;
-  double apex = 0, highest_body = 0;
+  double apex = 0, highest_effector = 0;
   int flight_steps = 0, steps = 0;
   std::vector<float> foot_ground;  // per foot: its height at the episode's first frame + 3 cm
   FamilyRolloutResult result;
@@ -53,7 +52,7 @@ void Observe(const HeightIndices& h, const float* obs, Watch* watch) {
     for (int foot : h.feet) watch->foot_ground.push_back(root + obs[foot] + 0.03f);
   }
   watch->apex = std::max(watch->apex, static_cast<double>(root));
-  for (int body : h.bodies) watch->highest_body = std::max(watch->highest_body, static_cast<double>(root + obs[body]));
+  for (int e : h.effectors) watch->highest_effector = std::max(watch->highest_effector, static_cast<double>(root + obs[e]));
   bool airborne = true;
   for (size_t f = 0; f < h.feet.size(); ++f) airborne &= root + obs[h.feet[f]] > watch->foot_ground[f];
   watch->flight_steps += airborne;
@@ -90,7 +89,7 @@ absl::StatusOr<std::vector<FamilyRolloutResult>> FamilyTrainer::Evaluate(const s
       Watch& w = watches[i];
       const bool ended = result->done[i].item<float>() != 0;
       if (w.stage == 1 && ended) {
-        w.result = {w.result.params, w.apex, w.highest_body, w.flight_steps * dt, result->fitness[i].item<float>(),
+        w.result = {w.result.params, w.apex, w.highest_effector, w.flight_steps * dt, result->fitness[i].item<float>(),
                     w.steps + 1, result->truncated[i].item<float>() != 0};
         w.stage = 2;
       } else if (w.stage == 1) {

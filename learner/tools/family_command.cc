@@ -19,7 +19,8 @@ ABSL_FLAG(std::vector<std::string>, param, {},
           "--family: a task parameter's range NAME=LO:HI or constraint NAME=VALUE; give --param once per "
           "parameter (the server's Describe lists them: gravity, body_mass_scale, jump_height, ...)");
 ABSL_FLAG(int, family_net_every, 10, "--family: iterations between fits of the parameterization network P(a)");
-ABSL_FLAG(double, family_acceptance, 0.5, "--family: fitness an elite needs to count as covering its parameters");
+// 0.1: the authors' public code admits no elite below F = 0.1.
+ABSL_FLAG(double, family_acceptance, 0.1, "--family: fitness an elite needs to count as covering its parameters");
 ABSL_FLAG(std::vector<std::string>, family_eval, {},
           "--family: after training (--iterations 0: only), roll the policy out at these values of the first "
           "varied parameter (the others at mid-range) and write run_dir/family_eval.csv: apex, flight time, F");
@@ -119,10 +120,10 @@ int EvaluateFamily(family::FamilyTrainer& trainer, const std::string& run_dir) {
   if (!results.ok()) return FamilyFail(std::string(results.status().message()), 1);
   std::vector<std::string> names;
   for (const ParamRange& range : trainer.space().ranges()) names.push_back(range.name);
-  std::string csv = absl::StrCat(absl::StrJoin(names, ","), ",apex_height_m,highest_body_m,flight_s,fitness,steps,reached_end\n");
+  std::string csv = absl::StrCat(absl::StrJoin(names, ","), ",apex_height_m,highest_effector_m,flight_s,fitness,steps,reached_end\n");
   for (const family::FamilyRolloutResult& r : *results) {
     absl::StrAppend(&csv, absl::StrJoin(r.params, ","), absl::StrFormat(",%.4f,%.4f,%.4f,%.4f,%d,%d\n", r.apex_height,
-                                                                          r.highest_body, r.flight_s, r.fitness, r.steps,
+                                                                          r.highest_effector, r.flight_s, r.fitness, r.steps,
                                                                           r.reached_end));
   }
   std::fputs(csv.c_str(), stdout);
