@@ -26,12 +26,10 @@ HeightIndices FindHeights(const v1::EnvSpec& spec) {
     for (int k = 0; k < part.bodies_size() && k < part.self_obs_size(); ++k) {
       const std::string& body = part.bodies(k);
       if (body == spec.body_names(0)) indices.root = part.self_obs(k).start();
-      for (const char* effector : {"Ankle", "Toe", "Wrist", "Hand"}) {
-        if (absl::StrContains(body, effector)) indices.effectors.push_back(part.self_obs(k).start() + 2);  // local z
-      }
-      if (absl::StrContains(body, "Ankle") || absl::StrContains(body, "Toe")) {
-        indices.feet.push_back(part.self_obs(k).start() + 2);  // local z
-      }
+      const int local_z = part.self_obs(k).start() + 2;
+      const bool foot = absl::StrContains(body, "Ankle") || absl::StrContains(body, "Toe");
+      if (foot) indices.feet.push_back(local_z);
+      if (foot || absl::StrContains(body, "Wrist") || absl::StrContains(body, "Hand")) indices.effectors.push_back(local_z);
     }
   }
   return indices;

@@ -294,8 +294,9 @@ void FamilyEpisode::AddFitnessFrame(const HumanoidState& sim, const HumanoidStat
   }
   // Means over the hinges, as the authors' code normalizes them: summed over our 69 hinges, a
   // walk-quality motion scored F ~ 0.01 and no episode could ever pass an acceptance of 0.5.
-  frame.pose_error /= static_cast<double>(std::max<size_t>(hinges, 1));
-  frame.velocity_error /= static_cast<double>(std::max<size_t>(hinges, 1));
+  const double hinge_count = static_cast<double>(std::max<size_t>(hinges, 1));
+  frame.pose_error /= hinge_count;
+  frame.velocity_error /= hinge_count;
   foot_speeds_.clear();
   for (size_t f = 0; f < family_->feet.size(); ++f) {
     const int body = family_->feet[f];

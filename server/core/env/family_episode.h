@@ -53,7 +53,7 @@ struct FamilyContext {
   int obstacle_geom = -1;               // MuJoCo geom id; -1 without obstacle parameters
   std::vector<char> humanoid_geom;      // per MuJoCo geom: a body of the humanoid's
   std::vector<int> feet;                // spec body indices
-  // Per hinge, N*m: the paper's torque limits by joint group (FamilyTorqueLimit).
+  // Per hinge, N*m: the paper's torque limits by joint group (FamilyTorqueLimits).
   std::vector<double> hinge_torque_limit;
   std::vector<double> foot_contact_height;  // per foot: in contact below it (the clip's start + 3 cm)
   std::vector<int> effectors;           // ankles and wrists, spec body indices
