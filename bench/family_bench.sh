@@ -8,6 +8,10 @@
 #
 # DIR/run/family_eval.csv: per evaluated value, the root's apex (m), the time with both feet off
 # the floor (s) and the fitness. --resume continues DIR/run (a run in parts, its checkpoint kept).
+# Then the exported DIR/run/policy.pt goes through the server as a user would run it:
+# DIR/rollout_<value>.json (modskill-client rollout --param NAME=VALUE, the first varied
+# parameter), DIR/rollout.html (the viewer page at the first value) and DIR/family_query.json
+# (modskill-client family: the ranges, P(a) at the middle and the nearest elites).
 set -euo pipefail
 repo="$(cd "$(dirname "$0")/.." && pwd)"
 BUILD="${MODSKILL_BUILD_DIR:-$repo/build}"
@@ -57,3 +61,14 @@ print(f"after {minutes[-1]:.1f} min, {last['env_steps']} env steps: coverage {fl
       f"{last['elites']} elites, mean F {float(last['mean_fitness']):.3f}")
 EOF
 cat "$OUT/run/family_eval.csv"
+
+# The exported policy on the server, at the same values.
+first_param="${params[1]%%=*}"
+client="$BUILD/client/modskill-client"
+html=(--html "$OUT/rollout.html")
+for value in ${eval_values//,/ }; do
+  "$client" --server "127.0.0.1:$port" rollout --checkpoint "$OUT/run/policy.pt" --param "$first_param=$value" \
+      --out "$OUT/rollout_$value.json" "${html[@]}" | grep -E "^family at|wrote"
+  html=()
+done
+"$client" --server "127.0.0.1:$port" family --checkpoint "$OUT/run/policy.pt" --out "$OUT/family_query.json"

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <string>
 
+#include "common/policy/family_elites.h"
 #include "common/policy/policy_spec.h"
 #include "fuzz/fuzz_service.h"
 #include "server/core/env/policy_fit.h"
@@ -35,8 +36,14 @@ void FuzzPolicySpec(const uint8_t* data, size_t size) {
             again->action_size == spec->action_size && again->joint_names == spec->joint_names &&
             again->control_dt == spec->control_dt && again->action.mode == spec->action.mode &&
             again->action.residual_scale == spec->action.residual_scale && again->task == spec->task &&
-            again->controller_input == spec->controller_input,
+            again->controller_input == spec->controller_input && again->family_clip == spec->family_clip &&
+            again->family_frames == spec->family_frames && again->family.size() == spec->family.size(),
         "ToJson -> FromJson is the identity");
+  for (size_t k = 0; k < spec->family.size(); ++k) {
+    Check(again->family[k].name == spec->family[k].name && again->family[k].lo == spec->family[k].lo &&
+              again->family[k].hi == spec->family[k].hi && ValidateParamRange(spec->family[k]).ok(),
+          "a family's ranges are valid and survive ToJson -> FromJson");
+  }
 
   const ServiceFixture& fixture = Fixture();
   auto env_spec = fixture.env_specs.find(spec->part_layout);
@@ -44,6 +51,22 @@ void FuzzPolicySpec(const uint8_t* data, size_t size) {
   const absl::Status compatible = CheckPolicyFitsEnv(*spec, env_spec->second);
   Check(compatible.ok() || compatible.code() == absl::StatusCode::kFailedPrecondition,
         "an incompatible spec is FAILED_PRECONDITION");
+}
+
+// A family policy's elite file (modskill/family_elites.json): INVALID_ARGUMENT or elites of the
+// asked-for size with finite values.
+void FuzzFamilyElites(const uint8_t* data, size_t size) {
+  const absl::string_view text(reinterpret_cast<const char*>(data), size);
+  for (int dims : {1, 2}) {
+    auto elites = FamilyElitesFromJson(text, dims);
+    if (!elites.ok()) {
+      Check(elites.status().code() == absl::StatusCode::kInvalidArgument, "bad elites are INVALID_ARGUMENT");
+      continue;
+    }
+    for (const FamilyEliteRecord& elite : *elites) {
+      Check(static_cast<int>(elite.params.size()) == dims && std::isfinite(elite.fitness), "elites as promised");
+    }
+  }
 }
 
 }  // namespace
@@ -56,5 +79,6 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   modskill::fuzz::FuzzPolicySpec(data, size);
+  modskill::fuzz::FuzzFamilyElites(data, size);
   return 0;
 }

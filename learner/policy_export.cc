@@ -11,20 +11,10 @@
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
 #include "common/atomic_file.h"
+#include "learner/torchscript_source.h"
 
 namespace modskill::learner {
 namespace {
-
-// The shortest decimal that reads back as `value`, always a float literal for TorchScript.
-std::string ScriptFloat(double value) {
-  std::string text;
-  for (int precision = 1; precision <= 17; ++precision) {
-    text = absl::StrFormat("%.*g", precision, value);
-    if (std::strtod(text.c_str(), nullptr) == value) break;
-  }
-  if (text.find_first_of(".en") == std::string::npos) text += ".0";
-  return text;
-}
 
 std::string PartPrefix(size_t part, absl::string_view role) { return absl::StrCat("part", part, "_", role); }
 
@@ -48,14 +38,6 @@ void EmitMlp(const MlpImpl& mlp, absl::string_view prefix, absl::string_view inp
     }
     x = "h";
   }
-}
-
-// Emits `x = RunningMeanStd::Normalize(input)` with the registered buffers `<stats>_mean` and
-// `<stats>_var`.
-void EmitNormalize(absl::string_view input, absl::string_view stats, std::string* source) {
-  absl::StrAppend(source, "    x = torch.clamp((", input, " - self.", stats, "_mean.to(", input, ".dtype)) / torch.sqrt(self.",
-                  stats, "_var + ", ScriptFloat(RunningMeanStdImpl::kEpsilon), ").to(", input, ".dtype), ",
-                  ScriptFloat(-RunningMeanStdImpl::kClip), ", ", ScriptFloat(RunningMeanStdImpl::kClip), ")\n");
 }
 
 void RegisterMlp(const MlpImpl& mlp, absl::string_view prefix, torch::jit::Module* module) {

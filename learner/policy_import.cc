@@ -36,6 +36,12 @@ absl::StatusOr<ExportedPolicy> ReadExportedPolicy(const std::string& path) {
   }
   auto spec = PolicySpec::FromJson(extra[kCheckpointSpecFile]);
   if (!spec.ok()) return absl::InvalidArgumentError(absl::StrCat(path, ": ", spec.status().message()));
+  if (spec->is_family()) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        path, ": a motor-skill family's policy (the family of '", spec->family_clip,
+        "', modskill-learner --family), not a ModSkill tracker or task policy; run it with modskill-client rollout "
+        "--param NAME=VALUE"));
+  }
   policy.spec = *std::move(spec);
   return policy;
 }

@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include "absl/strings/str_cat.h"
+#include "common/policy/family_elites.h"
 #include "common/policy/policy_spec.h"
 #include "server/core/sim/humanoid_spec.h"
 #include "server/core/sim/part_layout.h"
@@ -153,6 +154,50 @@ TEST(PolicySpecTest, TaskAndControllerInputRoundTripWithDefaultsForOldFiles) {
     auto bad = PolicySpec::FromJson(json);
     EXPECT_EQ(bad.status().code(), absl::StatusCode::kInvalidArgument) << json;
     EXPECT_THAT(std::string(bad.status().message()), ::testing::HasSubstr(field)) << json;
+  }
+}
+
+// A family's clip, frames and ranges: recorded and read back; bad ones are INVALID_ARGUMENT naming
+// the field; the elite file parses only as finite elites of the family's size.
+TEST(PolicySpecTest, FamilyFieldsRoundTripAndBadOnesAreNamed) {
+  const std::string head =
+      R"({"part_layout": "5part", "obs_size": 3, "action_size": 1, "joint_names": ["a"], "control_dt": 0.03)";
+  auto plain = PolicySpec::FromJson(head + "}");
+  ASSERT_TRUE(plain.ok());
+  EXPECT_FALSE(plain->is_family());
+  PolicySpec family = *plain;
+  family.family_clip = "deepmimic_jump";
+  family.family_frames = 53;
+  family.family = {{"gravity", 4, 14}, {"body_mass_scale", 0.8, 1.2}};
+  auto again = PolicySpec::FromJson(family.ToJson());
+  ASSERT_TRUE(again.ok()) << again.status();
+  ASSERT_TRUE(again->is_family());
+  EXPECT_EQ(again->family_clip, "deepmimic_jump");
+  EXPECT_EQ(again->family_frames, 53);
+  ASSERT_EQ(again->family.size(), 2u);
+  EXPECT_EQ(again->family[1].name, "body_mass_scale");
+  EXPECT_EQ(again->family[1].lo, 0.8);
+  const std::string clip = R"(, "family_clip": "deepmimic_jump", "family_frames": 53)";
+  for (const auto& [field, tail] : std::vector<std::pair<std::string, std::string>>{
+           {"family", R"(, "family": [])"},
+           {"family[0]", R"(, "family": [{"name": "gravity", "lo": 14, "hi": 4}])" + clip},
+           {"family[0]", R"(, "family": [{"name": "warp_speed", "lo": 1, "hi": 2}])" + clip},
+           {"family[1]", R"(, "family": [{"name": "gravity", "lo": 4, "hi": 14}, {"name": "gravity", "lo": 4, "hi": 5}])" + clip},
+           {"family_clip", R"(, "family": [{"name": "gravity", "lo": 4, "hi": 14}], "family_clip": "", "family_frames": 53)"},
+           {"family_frames", R"(, "family": [{"name": "gravity", "lo": 4, "hi": 14}], "family_clip": "x", "family_frames": 1)"}}) {
+    auto bad = PolicySpec::FromJson(head + tail + "}");
+    EXPECT_EQ(bad.status().code(), absl::StatusCode::kInvalidArgument) << tail;
+    EXPECT_THAT(std::string(bad.status().message()), ::testing::HasSubstr(field)) << tail;
+  }
+
+  auto elites = FamilyElitesFromJson(FamilyElitesToJson({{{5.0, 1.0}, 0.4}, {{13.5, 0.9}, 0.2}}), 2);
+  ASSERT_TRUE(elites.ok()) << elites.status();
+  ASSERT_EQ(elites->size(), 2u);
+  EXPECT_EQ((*elites)[1].params, (std::vector<double>{13.5, 0.9}));
+  EXPECT_EQ((*elites)[1].fitness, 0.2);
+  for (const char* bad : {"{}", R"([{"params": [1], "fitness": 0.5}])", R"([{"params": [1, 2]}])",
+                          R"([{"params": [1, 2], "fitness": "high"}])", "[1, 2]"}) {
+    EXPECT_EQ(FamilyElitesFromJson(bad, 2).status().code(), absl::StatusCode::kInvalidArgument) << bad;
   }
 }
 

@@ -2,7 +2,9 @@
 // proto/modskill/v1/modskill.proto): the env spec, the motion library, server stats, uploads,
 // checkpoint evaluation (rollout) and a stepping throughput check (simulate).
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <utility>
 #include <memory>
 #include <string>
 #include <vector>
@@ -14,12 +16,14 @@
 #include "absl/flags/usage_config.h"
 #include "absl/status/status.h"
 #include "absl/strings/match.h"
+#include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_split.h"
 #include "absl/time/time.h"
 #include "client/cpp/add_motions_command.h"
 #include "client/cpp/cli_output.h"
 #include "client/cpp/describe_command.h"
+#include "client/cpp/family_command.h"
 #include "client/cpp/motions_command.h"
 #include "client/cpp/rollout_command.h"
 #include "client/cpp/simulate_command.h"
@@ -58,6 +62,10 @@ ABSL_FLAG(int, envs, 16, "simulate: envs in the session");
 ABSL_FLAG(int, steps, 100, "simulate: steps to take");
 ABSL_FLAG(std::string, actions, "zero", "simulate: zero or random (uniform in [-1, 1])");
 ABSL_FLAG(uint64_t, seed, 1, "simulate: seed of the session and of the random actions");
+ABSL_FLAG(std::vector<std::string>, param, {},
+          "rollout, family: a motor-skill family's task parameter NAME=VALUE (e.g. gravity=6), repeated or "
+          "comma-separated; the ones left out run at the middle of their trained range");
+ABSL_FLAG(int, nearest_elites, 0, "family: elites to list, nearest first (0: 5)");
 
 namespace modskill {
 namespace {
@@ -70,7 +78,10 @@ commands:
   stats                            server totals, live sessions and their 5 most sampled clips
   add-motions FILE...              upload clips (.npz .bvh .txt .msclip) to the server's library
   rollout --checkpoint F [--clip NAME...] [--out F.json] [--upload] [--frames] [--html F.html]
-                                   evaluate a TorchScript policy on clips (default: every clip)
+          [--param NAME=VALUE...]  evaluate a TorchScript policy on clips (default: every clip); a
+                                   motor-skill family's at task parameters (--param gravity=6)
+  family --checkpoint F [--param NAME=VALUE...] [--nearest_elites K] [--out F.json]
+                                   a family's ranges, its elites nearest a and P(a), the edited motion
   skills --checkpoint F --clip NAME... --out DIR [--max_steps N]
                                    record a tracker's per-part z on clips: DIR/skills.json with a 2-D PCA
   compose --checkpoint F --base CLIP --source CLIP --parts NAME[,NAME] [--interpolate] --out DIR
@@ -91,10 +102,31 @@ int Usage(const std::string& message) {
   return kUsageError;
 }
 
+// The flags that may be repeated, every value collected.
+struct RepeatedFlags {
+  std::vector<std::string> clips;
+  std::vector<std::pair<std::string, double>> params;  // --param NAME=VALUE
+};
+
+// "NAME=VALUE[,NAME=VALUE...]" -> params; false with `error` for a malformed entry.
+bool ParseParams(absl::string_view value, std::vector<std::pair<std::string, double>>* params, std::string* error) {
+  for (absl::string_view entry : absl::StrSplit(value, ',', absl::SkipWhitespace())) {
+    const size_t eq = entry.find('=');
+    double number = 0;
+    if (eq == absl::string_view::npos || eq == 0 || !absl::SimpleAtod(entry.substr(eq + 1), &number) ||
+        !std::isfinite(number)) {
+      *error = absl::StrCat("--param: '", entry, "' is not NAME=VALUE with a finite number (e.g. gravity=6)");
+      return false;
+    }
+    params->emplace_back(std::string(entry.substr(0, eq)), number);
+  }
+  return true;
+}
+
 // absl keeps only the last of repeated flags and exits with 1 on a bad one. This pass runs first:
-// it collects every --clip value (repeated and comma-separated) and reports an unknown flag or a
-// malformed value as a usage error.
-bool PrescanFlags(int argc, char** argv, std::vector<std::string>* clips, std::string* error) {
+// it collects every --clip and --param value (repeated and comma-separated) and reports an
+// unknown flag or a malformed value as a usage error.
+bool PrescanFlags(int argc, char** argv, RepeatedFlags* repeated, std::string* error) {
   for (int i = 1; i < argc; ++i) {
     absl::string_view arg = argv[i];
     if (arg == "--") break;
@@ -137,8 +169,9 @@ bool PrescanFlags(int argc, char** argv, std::vector<std::string>* clips, std::s
       return false;
     }
     if (name == "clip") {
-      for (absl::string_view clip : absl::StrSplit(value, ',', absl::SkipWhitespace())) clips->emplace_back(clip);
+      for (absl::string_view clip : absl::StrSplit(value, ',', absl::SkipWhitespace())) repeated->clips.emplace_back(clip);
     }
+    if (name == "param" && !ParseParams(value, &repeated->params, error)) return false;
   }
   return true;
 }
@@ -163,7 +196,8 @@ absl::StatusOr<std::unique_ptr<SimulationClient>> Connect() {
 
 // Runs the checked command with its options from the flags; returns the exit code.
 int RunCommand(SimulationClient& client, const std::string& command, const std::vector<std::string>& operands,
-               const std::vector<std::string>& clips) {
+               const RepeatedFlags& repeated) {
+  const std::vector<std::string>& clips = repeated.clips;
   if (command == "describe") return cli::Describe(client, absl::GetFlag(FLAGS_part_layout));
   if (command == "motions") return cli::Motions(client);
   if (command == "stats") return cli::Stats(client);
@@ -188,7 +222,17 @@ int RunCommand(SimulationClient& client, const std::string& command, const std::
     options.out = absl::GetFlag(FLAGS_out);
     options.frames = absl::GetFlag(FLAGS_frames);
     options.html = absl::GetFlag(FLAGS_html);
+    options.family_params = repeated.params;
     return cli::Rollout(client, options);
+  }
+  if (command == "family") {
+    cli::FamilyQueryOptions options;
+    options.checkpoint = absl::GetFlag(FLAGS_checkpoint);
+    options.upload = absl::GetFlag(FLAGS_upload);
+    options.params = repeated.params;
+    options.nearest_elites = absl::GetFlag(FLAGS_nearest_elites);
+    options.out = absl::GetFlag(FLAGS_out);
+    return cli::QueryFamily(client, options);
   }
   cli::SimulateOptions options;
   options.num_envs = absl::GetFlag(FLAGS_envs);
@@ -210,16 +254,22 @@ int Main(int argc, char** argv) {
   usage_config.contains_helpshort_flags = usage_config.contains_help_flags;
   usage_config.version_string = [] { return std::string("modskill-client 0.1.0\n"); };
   absl::SetFlagsUsageConfig(usage_config);
-  std::vector<std::string> clips;
-  if (std::string error; !PrescanFlags(argc, argv, &clips, &error)) return Usage(error);
+  RepeatedFlags repeated;
+  if (std::string error; !PrescanFlags(argc, argv, &repeated, &error)) return Usage(error);
   std::vector<char*> args = absl::ParseCommandLine(argc, argv);
-  if (clips.empty()) clips = absl::GetFlag(FLAGS_clip);  // e.g. from a --flagfile
+  if (repeated.clips.empty()) repeated.clips = absl::GetFlag(FLAGS_clip);  // e.g. from a --flagfile
+  if (repeated.params.empty()) {
+    std::string error;
+    for (const std::string& entry : absl::GetFlag(FLAGS_param)) {
+      if (!ParseParams(entry, &repeated.params, &error)) return Usage(error);
+    }
+  }
   if (args.size() < 2) return Usage("no command given");
   const std::string command = args[1];
   const std::vector<std::string> operands(args.begin() + 2, args.end());
 
   static const char* const kCommands[] = {"describe", "motions", "stats", "add-motions", "rollout", "simulate",
-                                          "skills", "compose"};
+                                          "skills", "compose", "family"};
   if (std::find(std::begin(kCommands), std::end(kCommands), command) == std::end(kCommands)) {
     return Usage(absl::StrCat("unknown command '", command, "'"));
   }
@@ -239,6 +289,15 @@ int Main(int argc, char** argv) {
     if (absl::GetFlag(FLAGS_frames) && absl::GetFlag(FLAGS_out).empty()) {
       return Usage("rollout: --frames needs --out (frames go to the JSON file)");
     }
+  }
+  if (command == "family") {
+    if (absl::GetFlag(FLAGS_checkpoint).empty()) return Usage("family: --checkpoint is required");
+    if (absl::GetFlag(FLAGS_nearest_elites) < 0 || absl::GetFlag(FLAGS_nearest_elites) > 64) {
+      return Usage("--nearest_elites must be in [0, 64]");
+    }
+  }
+  if (!repeated.params.empty() && command != "rollout" && command != "family") {
+    return Usage(absl::StrCat(command, ": --param applies to rollout and family only"));
   }
   if (command == "skills" || command == "compose") {
     if (absl::GetFlag(FLAGS_checkpoint).empty()) return Usage(command + ": --checkpoint is required");
@@ -269,7 +328,7 @@ int Main(int argc, char** argv) {
     }
     return cli::Fail(client.status());
   }
-  return RunCommand(**client, command, operands, clips);
+  return RunCommand(**client, command, operands, repeated);
 }
 
 }  // namespace

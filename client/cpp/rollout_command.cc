@@ -95,6 +95,7 @@ absl::StatusOr<v1::RolloutRequest> MakeRequest(const RolloutOptions& options, st
   }
   for (const std::string& clip : options.clips) request.add_clips(clip);
   request.set_stream_frames(options.frames || !options.html.empty());
+  for (const auto& [name, value] : options.family_params) (*request.mutable_family_params())[name] = value;
   return request;
 }
 
@@ -160,6 +161,17 @@ void PrintMetrics(const std::vector<v1::ClipMetrics>& metrics, double seconds, M
     if (m.success()) succeeded.Add(m);
   }
   std::printf("(errors in mm: g-mpjpe global, mpjpe root-relative, acc mm/frame^2, vel mm/frame)\n");
+  for (const v1::ClipMetrics& m : metrics) {
+    if (!m.has_family()) continue;
+    const v1::FamilyRolloutReport& f = m.family();
+    std::map<std::string, double> params(f.params().begin(), f.params().end());
+    std::string at;
+    for (const auto& [name, value] : params) absl::StrAppend(&at, at.empty() ? "" : ", ", name, "=", value);
+    std::printf("family at %s: F %.3f, root apex %.3f m, highest ankle/toe/wrist/hand %.3f m, flight %.2f s, "
+                "%.1f clip frames played%s\n",
+                at.c_str(), f.fitness(), f.apex_height_m(), f.highest_effector_m(), f.flight_s(), f.final_phase(),
+                f.reached_end() ? " (reached the clip's end)" : " (ended before the clip's end)");
+  }
   const int n = static_cast<int>(metrics.size());
   const double success_rate = n > 0 ? 100.0 * succeeded.clips / n : 0.0;
   if (n == 0) {
@@ -207,6 +219,16 @@ Json ClipJson(const v1::ClipMetrics& m, const v1::EnvSpec& spec, const std::vect
     clip["part_error_mm"] = std::move(parts);
   } else {
     clip["part_error_mm"] = std::vector<double>(m.part_error_mm().begin(), m.part_error_mm().end());
+  }
+  if (m.has_family()) {
+    const v1::FamilyRolloutReport& f = m.family();
+    clip["family"] = Json{{"params", std::map<std::string, double>(f.params().begin(), f.params().end())},
+                          {"fitness", f.fitness()},
+                          {"apex_height_m", f.apex_height_m()},
+                          {"highest_effector_m", f.highest_effector_m()},
+                          {"flight_s", f.flight_s()},
+                          {"reached_end", f.reached_end()},
+                          {"final_phase", f.final_phase()}};
   }
   return clip;
 }

@@ -6,6 +6,7 @@
 #define MODSKILL_CLIENT_CPP_ROLLOUT_COMMAND_H_
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "client/cpp/simulation_client.h"
@@ -21,6 +22,9 @@ struct RolloutOptions {
   std::string out;                 // JSON file to write; empty: none
   bool frames = false;             // stream per-frame body positions into `out`
   std::string html;                // viewer page to write (the rollout beside its reference); empty: none
+  // A motor-skill family's policy: its task parameters a by name (--param gravity=6); the server
+  // runs the rest at their ranges' middles and refuses a value outside the trained range.
+  std::vector<std::pair<std::string, double>> family_params;
 };
 
 // Returns the exit code.

@@ -83,6 +83,14 @@ absl::StatusOr<v1::ServerStats> SimulationClient::GetStats() {
   return response;
 }
 
+absl::StatusOr<v1::QueryFamilyResponse> SimulationClient::QueryFamily(const v1::QueryFamilyRequest& request) {
+  grpc::ClientContext context;
+  Prepare(&context);
+  v1::QueryFamilyResponse response;
+  if (auto status = FromGrpc(stub_->QueryFamily(&context, request, &response), "QueryFamily"); !status.ok()) return status;
+  return response;
+}
+
 absl::StatusOr<v1::AddMotionsResponse> SimulationClient::AddMotionFiles(const std::vector<std::string>& paths) {
   v1::AddMotionsRequest request;
   for (const std::string& path : paths) {

@@ -103,6 +103,8 @@ class SimulationClient {
   // Collects the metrics; frames go to `on_frame` when the request asks for them.
   absl::StatusOr<std::vector<v1::ClipMetrics>> Rollout(const v1::RolloutRequest& request,
                                                        const std::function<void(const v1::RolloutFrame&)>& on_frame = nullptr);
+  // A motor-skill family's policy at task parameters a: ranges, P(a), nearest elites.
+  absl::StatusOr<v1::QueryFamilyResponse> QueryFamily(const v1::QueryFamilyRequest& request);
   absl::StatusOr<std::unique_ptr<SimulationStream>> OpenSession(const v1::SessionConfig& config);
 
  private:

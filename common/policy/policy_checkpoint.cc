@@ -75,7 +75,7 @@ absl::StatusOr<std::unique_ptr<PolicyCheckpoint>> PolicyCheckpoint::LoadFile(con
 
 absl::StatusOr<std::unique_ptr<PolicyCheckpoint>> PolicyCheckpoint::LoadBytes(absl::string_view bytes) {
   std::unique_ptr<PolicyCheckpoint> checkpoint(new PolicyCheckpoint());
-  torch::jit::ExtraFilesMap extra{{kCheckpointSpecFile, ""}};
+  torch::jit::ExtraFilesMap extra{{kCheckpointSpecFile, ""}, {kCheckpointFamilyElitesFile, ""}};
   try {
     std::istringstream stream(std::string(bytes), std::ios::binary);
     checkpoint->module_ = std::make_unique<torch::jit::Module>(torch::jit::load(stream, torch::kCPU, extra));
@@ -92,6 +92,11 @@ absl::StatusOr<std::unique_ptr<PolicyCheckpoint>> PolicyCheckpoint::LoadBytes(ab
   auto spec = PolicySpec::FromJson(extra[kCheckpointSpecFile]);
   if (!spec.ok()) return absl::InvalidArgumentError(absl::StrCat("checkpoint: ", spec.status().message()));
   checkpoint->spec_ = *std::move(spec);
+  if (checkpoint->spec_.is_family() && !extra[kCheckpointFamilyElitesFile].empty()) {
+    auto elites = FamilyElitesFromJson(extra[kCheckpointFamilyElitesFile], static_cast<int>(checkpoint->spec_.family.size()));
+    if (!elites.ok()) return absl::InvalidArgumentError(absl::StrCat("checkpoint: ", elites.status().message()));
+    checkpoint->family_elites_ = *std::move(elites);
+  }
   // A skills() that does not work costs composition only, not plain rollouts: kept as the reason.
   checkpoint->skills_error_ = checkpoint->ProbeSkills();
   if (!checkpoint->skills_error_.ok()) checkpoint->skill_parts_ = 0;
@@ -161,6 +166,38 @@ absl::Status PolicyCheckpoint::ActWithZ(const float* obs, const float* z, int n,
     std::string message = e.what();
     return absl::InvalidArgumentError(
         absl::StrCat("checkpoint: act_with_z() failed: ", message.substr(0, message.find('\n'))));
+  }
+}
+
+bool PolicyCheckpoint::has_parameterization() const {
+  return spec_.is_family() && module_->find_method("parameterization").has_value();
+}
+
+absl::StatusOr<std::vector<float>> PolicyCheckpoint::Parameterization(absl::Span<const double> u) {
+  if (!has_parameterization()) {
+    return absl::FailedPreconditionError("checkpoint: no parameterization network (a family run that has fitted none yet)");
+  }
+  const int64_t dims = static_cast<int64_t>(spec_.family.size()), frames = spec_.family_frames;
+  if (static_cast<int64_t>(u.size()) != dims) {
+    return absl::InvalidArgumentError(absl::StrCat("parameterization: ", u.size(), " parameters, expected ", dims));
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  try {
+    torch::NoGradGuard no_grad;
+    const torch::Tensor a = torch::tensor(std::vector<double>(u.begin(), u.end()), torch::kFloat32);
+    const torch::Tensor output = module_->get_method("parameterization")({a.unsqueeze(0).expand({frames, dims}).contiguous(),
+                                                                         torch::linspace(0, 1, frames)})
+                                     .toTensor();
+    std::vector<float> out(static_cast<size_t>(frames) * spec_.action_size);
+    if (absl::Status status = CopyOut("parameterization()", output, static_cast<int>(frames), spec_.action_size, out.data());
+        !status.ok()) {
+      return status;
+    }
+    return out;
+  } catch (const std::exception& e) {
+    std::string message = e.what();
+    return absl::InvalidArgumentError(
+        absl::StrCat("checkpoint: parameterization() failed: ", message.substr(0, message.find('\n'))));
   }
 }
 

@@ -12,6 +12,8 @@
 
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
+#include "absl/types/span.h"
+#include "common/policy/family_elites.h"
 #include "common/policy/policy_spec.h"
 
 namespace torch::jit {
@@ -62,6 +64,15 @@ class PolicyCheckpoint {
   // obs: [n, obs_size], z: [n, skill_parts, embed_dim] -> actions: [n, action_size].
   absl::Status ActWithZ(const float* obs, const float* z, int n, float* actions);
 
+  // A motor-skill family's policy (spec().is_family(); learner/family/family_export.h): its elite
+  // set (kCheckpointFamilyElitesFile, empty without one) and the parameterization network P(a),
+  // the method parameterization(a [n, P] normalized to [0, 1], phase [n] in [0, 1]) -> [n, D].
+  const std::vector<FamilyEliteRecord>& family_elites() const { return family_elites_; }
+  bool has_parameterization() const;
+  // P(a) over the clip's frames: [spec().family_frames, action_size], row-major, at the
+  // normalized parameters u (one per range). FAILED_PRECONDITION without the method.
+  absl::StatusOr<std::vector<float>> Parameterization(absl::Span<const double> u);
+
  private:
   PolicyCheckpoint() = default;
   // Finds skills()' output shape by running it on one zero observation (no methods: stays 0).
@@ -73,6 +84,7 @@ class PolicyCheckpoint {
   int skill_parts_ = 0, embed_dim_ = 0;
   absl::Status skills_error_;
   bool part_controllers_ = false;
+  std::vector<FamilyEliteRecord> family_elites_;
   std::mutex mutex_;
 };
 

@@ -21,6 +21,11 @@ std::string PolicySpec::ToJson() const {
   json["residual_scale"] = action.residual_scale;
   json["task"] = task;
   json["controller_input"] = controller_input;
+  if (is_family()) {
+    json["family_clip"] = family_clip;
+    json["family_frames"] = family_frames;
+    for (const ParamRange& range : family) json["family"].push_back({{"name", range.name}, {"lo", range.lo}, {"hi", range.hi}});
+  }
   return json.dump(1);
 }
 
@@ -33,6 +38,39 @@ bool IsTaskName(absl::string_view name) {
     if (!((c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_')) return false;
   }
   return true;
+}
+
+constexpr int kMaxFamilyFrames = 1000000;
+
+// The family fields, when present (a family policy's): every range valid, no name twice.
+absl::Status ReadFamily(const nlohmann::json& json, PolicySpec* spec) {
+  if (!json.contains("family")) return absl::OkStatus();
+  const auto bad = [](absl::string_view field, absl::string_view why) {
+    return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": ", field, ": ", why));
+  };
+  const nlohmann::json& ranges = json.at("family");
+  if (!ranges.is_array() || ranges.empty() || ranges.size() > 64) return bad("family", "not a list of 1 to 64 ranges");
+  for (size_t k = 0; k < ranges.size(); ++k) {
+    ParamRange range{ranges[k].at("name").get<std::string>(), ranges[k].at("lo").get<double>(),
+                     ranges[k].at("hi").get<double>()};
+    if (absl::Status status = ValidateParamRange(range); !status.ok()) {
+      return bad(absl::StrCat("family[", k, "]"), status.message());
+    }
+    for (const ParamRange& seen : spec->family) {
+      if (seen.name == range.name) return bad(absl::StrCat("family[", k, "]"), absl::StrCat(range.name, " given twice"));
+    }
+    spec->family.push_back(std::move(range));
+  }
+  spec->family_clip = json.at("family_clip").get<std::string>();
+  if (spec->family_clip.empty() || spec->family_clip.size() > kMaxShownValueBytes) {
+    return bad("family_clip", "not a clip name");
+  }
+  const nlohmann::json& frames = json.at("family_frames");
+  if (!frames.is_number_integer() || frames.get<int64_t>() < 2 || frames.get<int64_t>() > kMaxFamilyFrames) {
+    return bad("family_frames", absl::StrCat(ShownValue(frames.dump()), " is not an integer in [2, ", kMaxFamilyFrames, "]"));
+  }
+  spec->family_frames = static_cast<int>(frames.get<int64_t>());
+  return absl::OkStatus();
 }
 
 }  // namespace
@@ -97,6 +135,7 @@ absl::StatusOr<PolicySpec> PolicySpec::FromJson(absl::string_view text) {
                                                      ShownValue(spec.controller_input), " is not ",
                                                      kPartObsControllerInput, " or ", kProprioceptionControllerInput));
     }
+    if (absl::Status status = ReadFamily(json, &spec); !status.ok()) return status;
   } catch (const nlohmann::json::exception& e) {
     return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": ", ShownValue(e.what())));
   }

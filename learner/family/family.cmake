@@ -24,7 +24,8 @@ add_library(modskill_learner_family_trainer STATIC
   ${CMAKE_CURRENT_LIST_DIR}/family_trainer_collect.cc
   ${CMAKE_CURRENT_LIST_DIR}/family_trainer_update.cc
   ${CMAKE_CURRENT_LIST_DIR}/family_trainer_checkpoint.cc
-  ${CMAKE_CURRENT_LIST_DIR}/family_trainer_evaluate.cc)
+  ${CMAKE_CURRENT_LIST_DIR}/family_trainer_evaluate.cc
+  ${CMAKE_CURRENT_LIST_DIR}/family_export.cc)
 target_link_libraries(modskill_learner_family_trainer PUBLIC modskill_learner_family modskill_learner_algo
   modskill_learner_nn modskill_client)
 target_compile_options(modskill_learner_family_trainer PRIVATE ${TORCH_CXX_FLAGS} -Wall -Wextra -Wno-unused-parameter)

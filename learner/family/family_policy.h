@@ -39,6 +39,7 @@ class FamilyActorCriticImpl : public torch::nn::Module {
   RunningMeanStd& obs_norm() { return obs_norm_; }
   const torch::Tensor& log_std() const { return log_std_; }
   const FamilyPolicyConfig& config() const { return config_; }
+  const torch::nn::Sequential& policy_mlp() const { return policy_; }  // normalized obs -> means
 
  private:
   FamilyPolicyConfig config_;

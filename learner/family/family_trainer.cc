@@ -61,6 +61,8 @@ absl::StatusOr<std::unique_ptr<FamilyTrainer>> FamilyTrainer::Create(FamilyTrain
   std::filesystem::create_directories(trainer->config_.run_dir);
   if (trainer->config_.resume) {
     if (absl::Status status = trainer->LoadCheckpoint(); !status.ok()) return status;
+    // The saved net was fitted to these elites' forerunners; one fit makes policy.pt's P(a) theirs.
+    if (trainer->elites_->size() > 0) trainer->net_loss_ = trainer->FitNet();
   }
   trainer->batch_ = trainer->curriculum_->SampleExploration(trainer->config_.curriculum.params_per_batch);
   trainer->AssignBatch();

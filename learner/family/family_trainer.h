@@ -10,7 +10,8 @@
 //   5. every few iterations the parameterization network P(a) is fitted to the elites.
 // The clip's end is the motion's end: an episode that reaches it is not bootstrapped.
 // run_dir gets progress.csv (one row per iteration: the coverage curve), checkpoint.pt (written
-// atomically; --resume continues from it) and parameterization.pt.
+// atomically; --resume continues from it), parameterization.pt and policy.pt (family_export.h:
+// the policy, P(a) and the elites in one TorchScript file for Rollout, QueryFamily and the viewer).
 #ifndef MODSKILL_LEARNER_FAMILY_FAMILY_TRAINER_H_
 #define MODSKILL_LEARNER_FAMILY_FAMILY_TRAINER_H_
 
@@ -107,6 +108,7 @@ class FamilyTrainer {
 
   const EliteSet& elites() const { return *elites_; }
   FamilyActorCritic& model() { return model_; }
+  ParameterizationNet& parameterization() { return net_; }
   int64_t env_steps() const { return env_steps_; }
 
  private:
@@ -141,6 +143,7 @@ class FamilyTrainer {
   std::vector<double> Values(const std::vector<std::vector<double>>& params);
   double FitNet();
   absl::Status SaveCheckpoint() const;
+  absl::Status ExportPolicyFile();  // run_dir/policy.pt
   absl::Status LoadCheckpoint();
   absl::Status AppendProgress(const FamilyIterationStats& stats) const;
 
@@ -165,6 +168,7 @@ class FamilyTrainer {
   int64_t env_steps_ = 0;
   double wall_s_ = 0;  // before this process (resume)
   double net_loss_ = 0;
+  bool net_fitted_ = false;  // P(a) has been fitted to elites (policy.pt then carries it)
   std::mt19937_64 rng_;
 };
 

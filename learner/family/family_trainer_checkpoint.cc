@@ -8,6 +8,7 @@
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
 #include "common/atomic_file.h"
+#include "learner/family/family_export.h"
 #include "learner/family/family_trainer.h"
 
 namespace modskill::learner::family {
@@ -66,6 +67,23 @@ absl::Status FamilyTrainer::SaveCheckpoint() const {
   } catch (const c10::Error& e) {
     return absl::InternalError(absl::StrCat("checkpoint: ", e.what_without_backtrace()));
   }
+}
+
+absl::Status FamilyTrainer::ExportPolicyFile() {
+  const v1::EnvSpec& env = stream_->spec();
+  modskill::PolicySpec spec;
+  spec.part_layout = env.part_layout();
+  spec.obs_size = env.obs_size();
+  spec.action_size = env.action_size();
+  spec.joint_names.assign(env.joint_names().begin(), env.joint_names().end());
+  spec.control_dt = env.control_dt();
+  spec.action.mode = ActionMode::kResidual;
+  spec.action.residual_scale = config_.residual_scale;
+  spec.family_clip = config_.clip;
+  spec.family_frames = frames_;
+  spec.family = config_.ranges;
+  return ExportFamilyPolicy(*model_, net_fitted_ ? net_.get() : nullptr, *elites_, *space_, spec,
+                            config_.run_dir + "/policy.pt");
 }
 
 absl::Status FamilyTrainer::LoadCheckpoint() {

@@ -92,6 +92,7 @@ double FamilyTrainer::FitNet() {
   options.epochs = 5;
   options.seed = static_cast<uint64_t>(iteration_);
   auto loss = FitParameterization(net_, *net_optimizer_, *data, options);
+  net_fitted_ |= loss.ok();
   return loss.ok() ? *loss : net_loss_;
 }
 
@@ -133,6 +134,7 @@ absl::Status FamilyTrainer::Run(const std::function<bool()>& stop) {
     stats->wall_s = wall_s_;
     if (absl::Status status = AppendProgress(*stats); !status.ok()) return status;
     if (absl::Status status = SaveCheckpoint(); !status.ok()) return status;
+    if (absl::Status status = ExportPolicyFile(); !status.ok()) return status;
     LogLine("family it %d steps %d return %.2f len %.1f F %.3f elites %d coverage %.3f %s", stats->iteration,
             stats->env_steps, stats->mean_return, stats->mean_length, stats->mean_fitness, stats->elites,
             stats->coverage, stats->mode);

@@ -35,6 +35,8 @@ class ParameterizationNetImpl : public torch::nn::Module {
   absl::StatusOr<torch::Tensor> Trajectory(absl::Span<const double> params, int64_t frames);
 
   const ParameterizationNetConfig& config() const { return config_; }
+  // The MLP after the phase features: [B, P + 3] -> [B, D] (family_export.h scripts it).
+  const torch::nn::Sequential& mlp() const { return mlp_; }
 
  private:
   ParameterizationNetConfig config_;

@@ -92,6 +92,16 @@ void ToProto(const ClipRolloutMetrics& metrics, v1::ClipMetrics* out) {
   for (double e : metrics.part_error_mm) out->add_part_error_mm(e);
   out->set_max_mean_body_error_m(metrics.worst_mean_body_error);
   out->set_normalized_return(metrics.normalized_return);
+  if (metrics.has_family) {
+    // The parameters' names are the checkpoint's: the Rollout RPC fills family.params.
+    v1::FamilyRolloutReport* family = out->mutable_family();
+    family->set_fitness(metrics.fitness);
+    family->set_apex_height_m(metrics.family.apex_height);
+    family->set_highest_effector_m(metrics.family.highest_effector);
+    family->set_flight_s(metrics.family.flight_s);
+    family->set_reached_end(metrics.reached_end);
+    family->set_final_phase(metrics.final_phase);
+  }
 }
 
 void ToProto(const std::vector<std::string>& part_names, const VariantProvenance& provenance,

@@ -14,8 +14,10 @@
 #include "common/shown_value.h"
 #include "common/wire/policy_enums.h"
 #include "common/wire/tensor_codec.h"
+#include "server/core/env/family_episode.h"
 #include "server/core/env/policy_fit.h"
 #include "server/core/util/confined_path.h"
+#include "server/service/family_request.h"
 #include "server/service/proto_conversions.h"
 #include "server/service/session_config_validation.h"
 #include "server/service/simulation_service.h"
@@ -66,6 +68,47 @@ absl::StatusOr<std::vector<int>> RolloutClipIds(const v1::RolloutRequest& reques
     for (int c = 0; c < motions.size(); ++c) clip_ids.push_back(c);
   }
   return clip_ids;
+}
+
+// A motor-skill family's policy runs its one clip, as a family env at the request's a; without
+// an asked-for termination it ends as in training (a fall, or a body 1 m off the warped clip).
+absl::Status UseFamily(const v1::RolloutRequest& request, const PolicySpec& trained,
+                       std::shared_ptr<const MotionLibrary>* motions, RolloutOptions* options) {
+  if (!trained.is_family()) {
+    if (request.family_params().empty()) return absl::OkStatus();
+    return absl::FailedPreconditionError(
+        "family_params: the checkpoint is not a motor-skill family's policy (modskill-learner --family exports one)");
+  }
+  if (absl::Status status = ValidateFamilyRanges(trained.family, "checkpoint family"); !status.ok()) {
+    return absl::FailedPreconditionError(status.message());
+  }
+  for (int c = 0; c < request.clips_size(); ++c) {
+    if (request.clips(c) != trained.family_clip) {
+      return absl::InvalidArgumentError(absl::StrCat("clips[", c, "]: the checkpoint is the family of '",
+                                                     ShownValue(trained.family_clip), "' and runs that clip only"));
+    }
+  }
+  auto clip = (*motions)->Subset({trained.family_clip});
+  if (!clip.ok()) {
+    return absl::FailedPreconditionError(absl::StrCat("checkpoint: the family's clip '", ShownValue(trained.family_clip),
+                                                      "' is not in this server's library"));
+  }
+  if (clip->clip(0).num_frames != trained.family_frames) {
+    return absl::FailedPreconditionError(absl::StrCat("checkpoint: the family's clip '", ShownValue(trained.family_clip),
+                                                      "' had ", trained.family_frames, " frames; this server's has ",
+                                                      clip->clip(0).num_frames));
+  }
+  auto a = ResolveFamilyParams(trained.family, request.family_params(), "family_params");
+  if (!a.ok()) return a.status();
+  *motions = std::make_shared<const MotionLibrary>(*std::move(clip));
+  options->family = trained.family;
+  options->family_params.assign(a->begin(), a->end());
+  if (request.termination() == v1::TERMINATION_UNSPECIFIED) {
+    options->termination = TerminationMode::kTraining;
+    options->termination_distance =
+        request.termination_distance() > 0 ? request.termination_distance() : kFamilyDefaultTerminationDistance;
+  }
+  return absl::OkStatus();
 }
 
 // Writes one RolloutFrame per simulated frame until the client goes away.
@@ -183,8 +226,9 @@ grpc::Status SimulationService::Rollout(grpc::ServerContext* context, const v1::
   }
   absl::StatusOr<TaskKind> task = RolloutTask(*request, trained);
   if (!task.ok()) return ToGrpcStatus(task.status());
-  if (absl::Status status = CheckPolicyFitsEnv(trained, MakeEnvSpec(*humanoid_, *layout, *task), TaskInfoOf(*task).name);
-      !status.ok()) {
+  EnvSpec env_spec = MakeEnvSpec(*humanoid_, *layout, *task);
+  if (trained.is_family()) AddFamilyToSpec(trained.family, &env_spec);
+  if (absl::Status status = CheckPolicyFitsEnv(trained, env_spec, TaskInfoOf(*task).name); !status.ok()) {
     return ToGrpcStatus(status);
   }
   if (absl::Status status = CheckActionMode(*request, trained.action); !status.ok()) return ToGrpcStatus(status);
@@ -193,6 +237,7 @@ grpc::Status SimulationService::Rollout(grpc::ServerContext* context, const v1::
   options->task = *task;
   if (absl::Status status = CheckSkillRequest(*request, **policy, *task); !status.ok()) return ToGrpcStatus(status);
   std::shared_ptr<const MotionLibrary> motions = motions_.Snapshot();
+  if (absl::Status status = UseFamily(*request, trained, &motions, &*options); !status.ok()) return ToGrpcStatus(status);
   absl::StatusOr<std::vector<int>> clip_ids = RolloutClipIds(*request, *motions);
   if (!clip_ids.ok()) return ToGrpcStatus(clip_ids.status());
   if (request->has_composition()) clip_ids = std::vector<int>{motions->Find(request->composition().base_clip())};
@@ -210,7 +255,11 @@ grpc::Status SimulationService::Rollout(grpc::ServerContext* context, const v1::
   auto metrics = RunRequested(*request, run);
   if (!metrics.ok()) return ToGrpcStatus(metrics.status());
   int successes = 0;
-  for (const v1::ClipMetrics& clip : *metrics) {
+  for (v1::ClipMetrics& clip : *metrics) {
+    if (trained.is_family()) {
+      const std::vector<double> a(options->family_params.begin(), options->family_params.end());
+      SetFamilyParams(trained.family, a, clip.mutable_family()->mutable_params());
+    }
     v1::RolloutResponse message;
     *message.mutable_metrics() = clip;
     successes += clip.success();
@@ -222,14 +271,19 @@ grpc::Status SimulationService::Rollout(grpc::ServerContext* context, const v1::
 
 absl::StatusOr<std::unique_ptr<PolicyCheckpoint>> SimulationService::LoadRolloutPolicy(
     const v1::RolloutRequest& request) const {
-  if (request.has_checkpoint_path()) {
+  return LoadPolicy(request.has_checkpoint_path() ? &request.checkpoint_path() : nullptr,
+                    request.has_checkpoint_bytes() ? &request.checkpoint_bytes() : nullptr);
+}
+
+absl::StatusOr<std::unique_ptr<PolicyCheckpoint>> SimulationService::LoadPolicy(const std::string* path,
+                                                                                const std::string* bytes) const {
+  if (path != nullptr) {
     // Only files in the operator's --checkpoint_dir directories, and no larger than an upload.
-    auto bytes = ReadConfinedFile(options_.checkpoint_dirs, request.checkpoint_path(), options_.max_upload_bytes,
-                                  "checkpoint_path");
-    if (!bytes.ok()) return bytes.status();
-    return PolicyCheckpoint::LoadBytes(*bytes);
+    auto read = ReadConfinedFile(options_.checkpoint_dirs, *path, options_.max_upload_bytes, "checkpoint_path");
+    if (!read.ok()) return read.status();
+    return PolicyCheckpoint::LoadBytes(*read);
   }
-  if (request.has_checkpoint_bytes()) return PolicyCheckpoint::LoadBytes(request.checkpoint_bytes());
+  if (bytes != nullptr) return PolicyCheckpoint::LoadBytes(*bytes);
   return absl::InvalidArgumentError("checkpoint: set checkpoint_path or checkpoint_bytes");
 }
 

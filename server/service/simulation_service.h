@@ -67,6 +67,8 @@ class SimulationService final : public v1::Simulation::Service {
                                   v1::SampleReferenceAmpResponse* response) override;
   grpc::Status Rollout(grpc::ServerContext* context, const v1::RolloutRequest* request,
                        grpc::ServerWriter<v1::RolloutResponse>* writer) override;
+  grpc::Status QueryFamily(grpc::ServerContext* context, const v1::QueryFamilyRequest* request,
+                           v1::QueryFamilyResponse* response) override;
   grpc::Status ListMotions(grpc::ServerContext* context, const v1::ListMotionsRequest* request,
                            v1::ListMotionsResponse* response) override;
   grpc::Status AddMotions(grpc::ServerContext* context, const v1::AddMotionsRequest* request,
@@ -96,6 +98,8 @@ class SimulationService final : public v1::Simulation::Service {
   // Rollout's phases (rollout_rpc.cc): the policy from a path in --checkpoint_dir or bytes, the
   // clips and options the request asks for.
   absl::StatusOr<std::unique_ptr<PolicyCheckpoint>> LoadRolloutPolicy(const v1::RolloutRequest& request) const;
+  // The checkpoint_path / checkpoint_bytes oneof of Rollout and QueryFamily (null: unset).
+  absl::StatusOr<std::unique_ptr<PolicyCheckpoint>> LoadPolicy(const std::string* path, const std::string* bytes) const;
   absl::StatusOr<RolloutOptions> RolloutOptionsFor(const v1::RolloutRequest& request,
                                                    const ActionMapping& trained) const;
 

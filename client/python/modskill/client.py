@@ -32,7 +32,7 @@ import numpy as np
 
 from . import tensors
 from .errors import ConnectError, ServerError
-from .types import ClipRollout, EnvSpec, StepResult, message_to_dict
+from .types import ClipRollout, EnvSpec, FamilyQuery, StepResult, message_to_dict
 from .v1 import modskill_pb2 as pb
 from .v1 import modskill_pb2_grpc as pb_grpc
 
@@ -254,7 +254,8 @@ class Client:
                 termination: Union[str, int] = "evaluation", termination_distance: float = 0.0,
                 max_steps_per_clip: int = 0, action_mode: Optional[Union[str, int]] = None,
                 timeout: Optional[float] = None, record_skills: bool = False,
-                composition: Optional[pb.SkillComposition] = None) -> List[ClipRollout]:
+                composition: Optional[pb.SkillComposition] = None,
+                family_params: Optional[Mapping[str, float]] = None) -> List[ClipRollout]:
         """Runs a TorchScript policy checkpoint on clips and returns one :class:`ClipRollout` per clip.
 
         Give exactly one of:
@@ -278,6 +279,10 @@ class Client:
           timeout: deadline in seconds (default: none).
           record_skills: also return each row's z (``ClipRollout.skill_z``; implies frames).
           composition: a ``SkillComposition`` (``compose`` builds one); clips must then be empty.
+          family_params: a motor-skill family's policy (``modskill-learner --family``): its task
+            parameters a by name, e.g. ``{"gravity": 6.0}``; the rest run at the middle of their
+            trained range. ``ClipRollout.family`` then says what a did (F, apex, flight). A value
+            outside the trained range is a ServerError INVALID_ARGUMENT naming it.
         """
         given = [x is not None for x in (checkpoint, checkpoint_bytes, server_checkpoint)]
         if sum(given) != 1:
@@ -291,6 +296,8 @@ class Client:
                                     max_steps_per_clip=max_steps_per_clip)
         if composition is not None:
             request.composition.CopyFrom(composition)
+        for name, value in (family_params or {}).items():
+            request.family_params[str(name)] = float(value)
         if action_mode is not None:
             request.action_mode = _enum(action_mode, _ACTION_MODE, "action_mode")
         if checkpoint is not None:
@@ -315,6 +322,30 @@ class Client:
             for result in results:
                 _set_frames(result, frame_rows.get(result.clip, []))
         return results
+
+    def query_family(self, checkpoint: Optional[PathLike] = None, params: Optional[Mapping[str, float]] = None,
+                     nearest_elites: int = 0, *, checkpoint_bytes: Optional[bytes] = None,
+                     server_checkpoint: Optional[str] = None, timeout: Optional[float] = None) -> FamilyQuery:
+        """A motor-skill family's policy.pt (``modskill-learner --family``) at task parameters a
+        (``params`` by name; the rest at the middle of their trained range): its ranges, P(a), the
+        parameterization network's edited motion over the clip's frames, and the ``nearest_elites``
+        elites nearest a (0: 5, the paper's k). Give exactly one of checkpoint (a local file,
+        uploaded), checkpoint_bytes or server_checkpoint (as ``rollout``). ServerError
+        FAILED_PRECONDITION for a checkpoint that is not a family's."""
+        given = [x is not None for x in (checkpoint, checkpoint_bytes, server_checkpoint)]
+        if sum(given) != 1:
+            raise ValueError("query_family: pass exactly one of checkpoint, checkpoint_bytes, server_checkpoint")
+        request = pb.QueryFamilyRequest(nearest_elites=int(nearest_elites))
+        for name, value in (params or {}).items():
+            request.params[str(name)] = float(value)
+        if checkpoint is not None:
+            with open(checkpoint, "rb") as f:
+                request.checkpoint_bytes = f.read()
+        elif checkpoint_bytes is not None:
+            request.checkpoint_bytes = bytes(checkpoint_bytes)
+        else:
+            request.checkpoint_path = server_checkpoint
+        return FamilyQuery.from_proto(self._unary("QueryFamily", request, timeout))
 
     def record_skills(self, checkpoint: PathLike, clips: Sequence[str] = (), max_steps_per_clip: int = 0,
                       timeout: Optional[float] = None) -> List[ClipRollout]:

@@ -288,6 +288,9 @@ class ClipRollout:
     # A composed rollout's report (Client.compose): source_clip, parts, mode, source_steps,
     # source_terminated, held_steps (base steps that used the source's last z).
     composition: Optional[Dict[str, Any]] = None
+    # A motor-skill family's rollout (Client.rollout with family_params): params (a by name),
+    # fitness (F), apex_height_m, highest_effector_m, flight_s, reached_end, final_phase.
+    family: Optional[Dict[str, Any]] = None
 
     @classmethod
     def from_proto(cls, metrics: pb.ClipMetrics) -> "ClipRollout":
@@ -309,6 +312,15 @@ class ClipRollout:
                 "source_terminated": metrics.composition.source_terminated,
                 "held_steps": metrics.composition.held_steps,
             },
+            family=None if not metrics.HasField("family") else {
+                "params": dict(metrics.family.params),
+                "fitness": metrics.family.fitness,
+                "apex_height_m": metrics.family.apex_height_m,
+                "highest_effector_m": metrics.family.highest_effector_m,
+                "flight_s": metrics.family.flight_s,
+                "reached_end": metrics.family.reached_end,
+                "final_phase": metrics.family.final_phase,
+            },
         )
 
     def body_errors(self) -> np.ndarray:
@@ -322,6 +334,42 @@ class ClipRollout:
         """The scalar metrics as a dict (for logging and tables)."""
         return {k: getattr(self, k) for k in ("clip", "success", "steps", "g_mpjpe_mm", "mpjpe_mm",
                                               "acc_error_mm", "vel_error_mm")}
+
+
+@dataclasses.dataclass
+class FamilyQuery:
+    """A motor-skill family's policy at task parameters a (``Client.query_family``).
+
+    ``parameterization`` is P(a), float32 ``[clip frames, len(parameterization_columns)]``: per
+    frame of the clip, each hinge's displacement (in the policy's action units) and tau, the log
+    of the phase step there; None while the run has fitted no parameterization network.
+    ``nearest_elites`` lists dicts with ``params``, ``fitness`` and ``distance`` (over the ranges
+    normalized to [0, 1]), nearest first.
+    """
+
+    clip: str
+    ranges: Dict[str, Tuple[float, float]]
+    params: Dict[str, float]
+    normalized_params: np.ndarray
+    parameterization: Optional[np.ndarray]
+    parameterization_columns: List[str]
+    elites: int
+    nearest_elites: List[Dict[str, Any]]
+
+    @classmethod
+    def from_proto(cls, response: pb.QueryFamilyResponse) -> "FamilyQuery":
+        trajectory = tensors.decode_field(response, "parameterization")
+        return cls(
+            clip=response.clip,
+            ranges={r.name: (r.lo, r.hi) for r in response.ranges},
+            params=dict(response.params),
+            normalized_params=np.array(response.normalized_params, dtype=np.float64),
+            parameterization=None if trajectory is None or trajectory.size == 0 else trajectory,
+            parameterization_columns=list(response.parameterization_columns),
+            elites=response.elites,
+            nearest_elites=[{"params": dict(e.params), "fitness": e.fitness, "distance": e.distance}
+                            for e in response.nearest_elites],
+        )
 
 
 def message_to_dict(message) -> Dict[str, object]:

@@ -91,8 +91,15 @@ absl::StatusOr<std::unique_ptr<EnvBatch>> RolloutBatch(std::shared_ptr<const Hum
   config.env.task_settings = options.task_settings;
   config.seed = options.seed;
   config.physics = options.physics;
+  config.env.family = options.family;
   auto created = EnvBatch::Create(config, humanoid, layout, motions);
   if (!created.ok()) return created.status();
+  if (!options.family.empty()) {
+    // Every env's first episode runs at a (the pending parameters the reset below begins with).
+    std::vector<float> rows;
+    for (size_t i = 0; i < clip_ids.size(); ++i) rows.insert(rows.end(), options.family_params.begin(), options.family_params.end());
+    if (absl::Status status = (*created)->SetFamilyParameters(rows); !status.ok()) return status;
+  }
   for (int i = 0; i < (*created)->num_envs(); ++i) (*created)->env(i).ResetTo(clip_ids[i], 0, (*created)->row(i));
   return created;
 }
@@ -112,6 +119,9 @@ absl::StatusOr<std::vector<ClipRolloutMetrics>> RunRollout(std::shared_ptr<const
   const int n = batch.num_envs();
   std::vector<Trajectory> trajectories(n);
   std::vector<bool> terminated(n, false);
+  const bool family = !options.family.empty();
+  std::vector<FamilyMotionMeter> meters(family ? n : 0, FamilyMotionMeter(humanoid->spec(), batch.spec().control_dt));
+  std::vector<double> fitness(n, 0.0);
   HumanoidState sim, ref;
   sim.Resize(humanoid->num_bodies(), humanoid->num_hinges());
   ref.Resize(humanoid->num_bodies(), humanoid->num_hinges());
@@ -119,7 +129,14 @@ absl::StatusOr<std::vector<ClipRolloutMetrics>> RunRollout(std::shared_ptr<const
   auto record = [&](int i, bool is_done, bool is_terminated, const float* z) {
     const MotionClip& clip = motions->clip(clip_ids[i]);
     ReadSimulatedState(*humanoid, batch.env(i).data(), &sim);
-    ReadReferenceState(clip, batch.env(i).frame(), &ref);
+    // A family's reference is the clip at its warped phase.
+    const FamilyEpisode* episode = batch.env(i).family();
+    if (episode != nullptr) {
+      ReadReferenceStateAt(clip, episode->phase(), &ref);
+      meters[i].Observe(sim);
+    } else {
+      ReadReferenceState(clip, batch.env(i).frame(), &ref);
+    }
     trajectories[i].sim.push_back(sim.body_pos);
     trajectories[i].ref.push_back(ref.body_pos);
     double mean = 0;
@@ -148,6 +165,7 @@ absl::StatusOr<std::vector<ClipRolloutMetrics>> RunRollout(std::shared_ptr<const
       for (int64_t t = 0; t + 1 < terms; ++t) task_return[i] += batch.buffers().reward_terms[i * terms + t];
       if (!batch.buffers().done[i]) continue;
       terminated[i] = !batch.buffers().truncated[i];
+      fitness[i] = family ? batch.buffers().fitness[i] : 0.0;
       record(i, true, terminated[i], nullptr);
       finished[i] = true;
       --remaining;
@@ -157,6 +175,14 @@ absl::StatusOr<std::vector<ClipRolloutMetrics>> RunRollout(std::shared_ptr<const
   for (int i = 0; i < n; ++i) {
     metrics.push_back(Measure(trajectories[i], motions->clip(clip_ids[i]).name, !terminated[i], layout));
     metrics.back().normalized_return = task_return[i] / PossibleSteps(options, motions->clip(clip_ids[i]));
+    if (family) {
+      ClipRolloutMetrics& m = metrics.back();
+      m.has_family = true;
+      m.family = meters[i].measures();
+      m.fitness = fitness[i];
+      m.final_phase = batch.env(i).family()->phase();
+      m.reached_end = m.final_phase >= motions->clip(clip_ids[i]).num_frames - 1;
+    }
   }
   return metrics;
 }

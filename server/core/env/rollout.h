@@ -11,6 +11,7 @@
 
 #include "absl/status/status.h"
 #include "server/core/env/env_batch.h"
+#include "server/core/env/family_measure.h"
 #include "server/core/env/humanoid_state.h"
 
 namespace modskill {
@@ -28,6 +29,11 @@ struct RolloutOptions {
   TaskKind task = TaskKind::kTracking;
   TaskSettings task_settings;
   uint64_t seed = 0;  // the goals' random stream
+  // A motor-skill family's policy (its trained ranges, EnvSpec.family) run at one parameter
+  // vector a (in units, one per range, inside it): every clip's env is a family env at a. The
+  // motions must then hold exactly the family's one clip.
+  std::vector<ParamRange> family;
+  std::vector<float> family_params;
 };
 
 // obs: [num_envs, obs_size] -> actions: [num_envs, action_size].
@@ -49,6 +55,13 @@ struct ClipRolloutMetrics {
   // could have lasted (Table 4's normalized return: 0 worst, 1 best). Tracking: over the clip's
   // steps.
   double normalized_return = 0;
+  // Family rollouts (RolloutOptions.family): what a did physically, the episode's F, the clip
+  // frames the time warp played and whether it reached the clip's last frame.
+  bool has_family = false;
+  FamilyMotionMeasures family;
+  double fitness = 0;
+  double final_phase = 0;
+  bool reached_end = false;
 };
 
 // One simulated frame of one clip: the character and its reference (world poses).

@@ -39,6 +39,11 @@ class SimulationStub(object):
                 request_serializer=modskill_dot_v1_dot_modskill__pb2.RolloutRequest.SerializeToString,
                 response_deserializer=modskill_dot_v1_dot_modskill__pb2.RolloutResponse.FromString,
                 )
+        self.QueryFamily = channel.unary_unary(
+                '/modskill.v1.Simulation/QueryFamily',
+                request_serializer=modskill_dot_v1_dot_modskill__pb2.QueryFamilyRequest.SerializeToString,
+                response_deserializer=modskill_dot_v1_dot_modskill__pb2.QueryFamilyResponse.FromString,
+                )
         self.ListMotions = channel.unary_unary(
                 '/modskill.v1.Simulation/ListMotions',
                 request_serializer=modskill_dot_v1_dot_modskill__pb2.ListMotionsRequest.SerializeToString,
@@ -103,6 +108,15 @@ class SimulationServicer(object):
         context.set_details('Method not implemented!')
         raise NotImplementedError('Method not implemented!')
 
+    def QueryFamily(self, request, context):
+        """A motor-skill family policy (`modskill-learner --family`) at task parameters a: the trained
+        ranges, the parameterization network's edited motion P(a) = {(d_t, tau_t)} over the clip's
+        frames, and the elites nearest to a.
+        """
+        context.set_code(grpc.StatusCode.UNIMPLEMENTED)
+        context.set_details('Method not implemented!')
+        raise NotImplementedError('Method not implemented!')
+
     def ListMotions(self, request, context):
         """Missing associated documentation comment in .proto file."""
         context.set_code(grpc.StatusCode.UNIMPLEMENTED)
@@ -149,6 +163,11 @@ def add_SimulationServicer_to_server(servicer, server):
                     servicer.Rollout,
                     request_deserializer=modskill_dot_v1_dot_modskill__pb2.RolloutRequest.FromString,
                     response_serializer=modskill_dot_v1_dot_modskill__pb2.RolloutResponse.SerializeToString,
+            ),
+            'QueryFamily': grpc.unary_unary_rpc_method_handler(
+                    servicer.QueryFamily,
+                    request_deserializer=modskill_dot_v1_dot_modskill__pb2.QueryFamilyRequest.FromString,
+                    response_serializer=modskill_dot_v1_dot_modskill__pb2.QueryFamilyResponse.SerializeToString,
             ),
             'ListMotions': grpc.unary_unary_rpc_method_handler(
                     servicer.ListMotions,
@@ -257,6 +276,23 @@ class Simulation(object):
         return grpc.experimental.unary_stream(request, target, '/modskill.v1.Simulation/Rollout',
             modskill_dot_v1_dot_modskill__pb2.RolloutRequest.SerializeToString,
             modskill_dot_v1_dot_modskill__pb2.RolloutResponse.FromString,
+            options, channel_credentials,
+            insecure, call_credentials, compression, wait_for_ready, timeout, metadata)
+
+    @staticmethod
+    def QueryFamily(request,
+            target,
+            options=(),
+            channel_credentials=None,
+            call_credentials=None,
+            insecure=False,
+            compression=None,
+            wait_for_ready=None,
+            timeout=None,
+            metadata=None):
+        return grpc.experimental.unary_unary(request, target, '/modskill.v1.Simulation/QueryFamily',
+            modskill_dot_v1_dot_modskill__pb2.QueryFamilyRequest.SerializeToString,
+            modskill_dot_v1_dot_modskill__pb2.QueryFamilyResponse.FromString,
             options, channel_credentials,
             insecure, call_credentials, compression, wait_for_ready, timeout, metadata)
 
