@@ -16,6 +16,7 @@
 #include "common/log.h"
 #include "common/wire/policy_enums.h"
 #include "learner/evaluation.h"
+#include "learner/part_retraining.h"
 #include "learner/ppo_update.h"
 #include "learner/trainer_phases.h"
 
@@ -172,6 +173,18 @@ absl::Status Trainer::BuildNetworks(const v1::EnvSpec& spec) {
   discriminator_ = AmpDiscriminator(layout_.amp_obs_size, config_.model.discriminator_hidden);
   obs_norm_ = RunningMeanStd(layout_.obs_size);
   amp_norm_ = RunningMeanStd(layout_.amp_obs_size);
+  if (!config_.init_from.empty()) {
+    ActionMapping action;
+    action.mode = ParseActionMode(config_.action_mode).value_or(ActionMode::kResidual);
+    action.residual_scale = config_.residual_scale;
+    auto tracker = LoadTrackerForRetraining(config_.init_from, config_.train_parts, spec.part_layout(), layout_, action);
+    if (!tracker.ok()) return tracker.status();
+    policy_ = tracker->policy;
+    obs_norm_ = tracker->obs_norm;
+    LogLine("init from %s: %d of %d parts train%s", config_.init_from, static_cast<int>(tracker->trained_parts.size()),
+            static_cast<int>(layout_.parts.size()),
+            config_.train_parts.empty() ? "" : " (the others and the observation statistics are frozen)");
+  }
   if (skills_) {
     if (absl::Status status = LoadSkills(); !status.ok()) return status;
   }

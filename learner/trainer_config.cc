@@ -22,6 +22,12 @@ absl::Status ValidateTask(const TrainerConfig& c) {
                                : absl::StrCat("--skills: required with --task ", c.task,
                                               " (a tracker's policy.pt trained with --controller_input proprioception)"));
   }
+  if (!c.train_parts.empty() && c.init_from.empty()) {
+    return absl::InvalidArgumentError("--train_parts: needs --init_from (the tracker whose other parts stay frozen)");
+  }
+  if (!c.init_from.empty() && !IsTrackingTask(c.task)) {
+    return absl::InvalidArgumentError(absl::StrCat("--init_from: tracking only, not with --task ", c.task, " (use --skills)"));
+  }
   if (!IsTrackingTask(c.task) && c.loop_clips) {
     return absl::InvalidArgumentError(absl::StrCat("--loop_clips: tracking only, not with --task ", c.task));
   }
@@ -191,6 +197,10 @@ std::string TrainerConfig::ToJson() const {
   json["termination_curriculum"] = {curriculum_start, curriculum_end};
   json["task"] = task;
   json["loop_clips"] = loop_clips;
+  if (!init_from.empty()) {
+    json["init_from"] = init_from;
+    json["train_parts"] = train_parts;
+  }
   if (!IsTrackingTask(task)) {
     json["skills"] = skills;
     json["task_hidden"] = model.task_hidden;

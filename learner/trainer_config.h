@@ -55,6 +55,10 @@ struct TrainerConfig {
   // --controller_input proprioception). The task session then runs the tracker's action mapping.
   std::string task = "tracking";
   std::string skills;
+  // Tracking from an exported tracker (part_retraining.h): its policy.pt, and the parts that train
+  // (empty: all); the other parts' controllers and attention maps stay frozen.
+  std::string init_from;
+  std::vector<std::string> train_parts;
   // Tracking: clips loop (SessionConfig.loop_clips), so that episodes run 300 steps through the
   // clip's seams, as a task's looping base motion later asks of the skills.
   bool loop_clips = false;

@@ -241,6 +241,56 @@ TEST(FamilyEnvTest, BadParameterRowsAreRefusedNamingThem) {
   EXPECT_EQ((*plain)->SetFamilyParameters(std::vector<float>{5.f}).code(), absl::StatusCode::kFailedPrecondition);
 }
 
+// The distance between two bodies of env 0's simulated character (from its own kinematics).
+double BodyDistance(const HumanoidState& state, int a, int b) { return (state.body_pos[a] - state.body_pos[b]).norm(); }
+
+// leg_scale and arm_scale reach the physics and the reference: the env's model has longer limbs,
+// its clip is the clip on that skeleton (on the ground, its stride scaled), and the simulated
+// character starts on it; the session's own proportions are untouched by a scaled episode.
+TEST(FamilyEnvTest, BodyProportionsScaleTheModelAndTheReference) {
+  auto batch = EnvBatch::Create(FamilyConfig({{"leg_scale", 0.8, 1.2}, {"arm_scale", 0.8, 1.2}}), Clip("deepmimic_walk"));
+  ASSERT_TRUE(batch.ok()) << batch.status();
+  const HumanoidModel& base = (*batch)->humanoid();
+  const HumanoidSpec& spec = base.spec();
+  const int hip = spec.BodyIndex("L_Hip"), knee = spec.BodyIndex("L_Knee"), ankle = spec.BodyIndex("L_Ankle");
+  const int shoulder = spec.BodyIndex("R_Shoulder"), elbow = spec.BodyIndex("R_Elbow"), pelvis = 0;
+  const MotionClip& original = DefaultMotions()->clip(DefaultMotions()->Find("deepmimic_walk"));
+  const double thigh = (original.body_pos[knee] - original.body_pos[hip]).norm();
+  const double upper_arm = (original.body_pos[elbow] - original.body_pos[shoulder]).norm();
+  const int last = original.num_frames - 1;
+  const double stride = (original.body_pos[static_cast<size_t>(last) * original.num_bodies] - original.body_pos[0]).head<2>().norm();
+  for (float leg : {0.8f, 1.2f}) {
+    StartAll(**batch, {leg, 1.2f});
+    const TrackingEnv& env = (*batch)->env(0);
+    ASSERT_NE(env.family()->body_model(), nullptr);
+    const MotionClip& clip = env.motion();
+    EXPECT_NEAR((clip.body_pos[knee] - clip.body_pos[hip]).norm(), leg * thigh, 1e-6);
+    EXPECT_NEAR((clip.body_pos[elbow] - clip.body_pos[shoulder]).norm(), 1.2 * upper_arm, 1e-6);
+    EXPECT_NEAR(LowestGeomPoint(env.family()->body_model()->spec(), clip, 0), 0.0, 0.02);
+    const double scaled_stride = (clip.body_pos[static_cast<size_t>(last) * clip.num_bodies] - clip.body_pos[0]).head<2>().norm();
+    EXPECT_NEAR(scaled_stride, leg * stride, 1e-6);
+    // The model the physics steps: the knee hangs leg x the thigh below the hip.
+    const mjModel* m = env.family()->model();
+    const double knee_offset = mju_norm3(m->body_pos + 3 * (knee + 1));
+    EXPECT_NEAR(knee_offset, leg * mju_norm3(base.model()->body_pos + 3 * (knee + 1)), 1e-6);
+    // The simulated character starts on the scaled reference, read with the scaled skeleton.
+    HumanoidState sim;
+    sim.Resize(spec.num_bodies(), spec.num_hinges());
+    ReadSimulatedState(*env.family()->body_model(), env.data(), &sim);
+    EXPECT_NEAR(BodyDistance(sim, hip, knee), leg * thigh, 1e-6);
+    EXPECT_NEAR(sim.body_pos[pelvis].z(), clip.body_pos[pelvis].z(), 1e-6);
+    EXPECT_NEAR(BodyDistance(sim, knee, ankle) / (original.body_pos[ankle] - original.body_pos[knee]).norm(), leg, 1e-6);
+    // Open loop, the scaled walk runs a few steps without blowing up.
+    for (int step = 0; step < 5; ++step) ASSERT_TRUE((*batch)->Step(Actions(**batch, 0.f)).ok());
+    EXPECT_EQ((*batch)->env(0).physics_resets(), 0);
+  }
+  // A longer-legged walker stands higher.
+  StartAll(**batch, {0.8f, 1.f});
+  const double short_pelvis = (*batch)->env(0).motion().body_pos[0].z();
+  StartAll(**batch, {1.2f, 1.f});
+  EXPECT_GT((*batch)->env(0).motion().body_pos[0].z(), short_pelvis + 0.1);
+}
+
 TEST(FamilyEnvTest, SessionsTheServerCannotRunAreRefused) {
   auto two_clips = DefaultMotions()->Subset({"deepmimic_jump", "deepmimic_walk"});
   ASSERT_TRUE(two_clips.ok());
@@ -249,8 +299,8 @@ TEST(FamilyEnvTest, SessionsTheServerCannotRunAreRefused) {
   EnvBatchConfig absolute = FamilyConfig({{"gravity", 4, 14}});
   absolute.env.action.mode = ActionMode::kAbsolute;
   EXPECT_FALSE(EnvBatch::Create(absolute, Clip("deepmimic_jump")).ok());
-  auto scaled = EnvBatch::Create(FamilyConfig({{"leg_scale", 0.8, 1.2}}), Clip("deepmimic_walk"));
-  EXPECT_NE(scaled.status().message().find("leg_scale"), std::string::npos) << scaled.status();
+  auto tiny = EnvBatch::Create(FamilyConfig({{"leg_scale", 0, 1.2}}), Clip("deepmimic_walk"));
+  EXPECT_NE(tiny.status().message().find("leg_scale"), std::string::npos) << tiny.status();
   auto inverted = EnvBatch::Create(FamilyConfig({{"gravity", 14, 4}}), Clip("deepmimic_walk"));
   EXPECT_NE(inverted.status().message().find("inverted"), std::string::npos) << inverted.status();
 }

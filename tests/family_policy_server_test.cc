@@ -3,6 +3,8 @@
 // refuses values outside the trained range, unknown names, other clips, and family parameters for
 // a tracker); QueryFamily returns the trained ranges, P(a) and the nearest elites; a task policy
 // cannot take it as its skills.
+#include <unistd.h>
+
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -26,7 +28,8 @@ class FamilyPolicyTest : public ::testing::Test {
   static void SetUpTestSuite() {
     server_ = StartTestServer().release();
     ASSERT_NE(server_, nullptr);
-    run_dir_ = new std::string(std::string(MODSKILL_TEST_TMP_DIR) + "/family_policy");
+    // ctest runs each test of the suite as its own process, side by side: a directory each.
+    run_dir_ = new std::string(absl::StrCat(MODSKILL_TEST_TMP_DIR, "/family_policy_", getpid()));
     std::filesystem::remove_all(*run_dir_);
     FamilyTrainerConfig config;
     config.client.server = absl::StrCat("127.0.0.1:", server_->port());
@@ -56,8 +59,11 @@ class FamilyPolicyTest : public ::testing::Test {
   static void TearDownTestSuite() {
     delete trainer_;
     delete server_;
+    if (run_dir_ != nullptr) std::filesystem::remove_all(*run_dir_);
     delete run_dir_;
   }
+  // A failed suite set-up fails every test (gtest would report them skipped).
+  void SetUp() override { ASSERT_NE(trainer_, nullptr) << "the family run of SetUpTestSuite failed"; }
 
   static std::string PolicyBytes() {
     auto bytes = ReadFileToString(*run_dir_ + "/policy.pt", size_t{1} << 30);

@@ -105,9 +105,9 @@ TEST(FamilyTrainerTest, BadSettingsAreNamed) {
   auto missing = FamilyTrainer::Create(config);
   EXPECT_NE(missing.status().message().find("no_such_clip"), std::string::npos) << missing.status();
   config = SmallFamily(*server, std::string(MODSKILL_TEST_TMP_DIR) + "/family_bad");
-  config.ranges = {{"leg_scale", 0.8, 1.2}};
-  auto not_offered = FamilyTrainer::Create(config);
-  EXPECT_NE(not_offered.status().message().find("leg_scale"), std::string::npos) << not_offered.status();
+  config.ranges = {{"leg_scale", 1.2, 0.8}};
+  auto inverted = FamilyTrainer::Create(config);
+  EXPECT_NE(inverted.status().message().find("leg_scale"), std::string::npos) << inverted.status();
   config = SmallFamily(*server, std::string(MODSKILL_TEST_TMP_DIR) + "/family_bad");
   config.horizon = 1;
   EXPECT_NE(FamilyTrainer::Create(config).status().message().find("--horizon"), std::string::npos);

@@ -63,6 +63,11 @@ ABSL_FLAG(std::string, task, "tracking",
           "that drives the frozen part controllers of --skills");
 ABSL_FLAG(std::string, skills, "",
           "--task: a tracker's exported policy.pt, trained with --controller_input proprioception");
+ABSL_FLAG(std::string, init_from, "",
+          "tracking: start from this tracker's exported policy.pt (attention, controllers, observation statistics)");
+ABSL_FLAG(std::vector<std::string>, train_parts, {},
+          "with --init_from: only these parts' controllers and attention maps train (e.g. R_Arm,L_Arm); the other "
+          "parts and the observation statistics stay frozen (default: every part trains)");
 ABSL_FLAG(bool, loop_clips, false,
           "tracking: clips loop (on at frame 1, carried by their own displacement) and episodes run 300 steps, so "
           "the skills learn to go on as a task's looping base motion asks");
@@ -307,6 +312,8 @@ absl::Status TaskFromFlags(TrainerConfig* config) {
   config->model.task_log_std = absl::GetFlag(FLAGS_task_log_std);
   config->model.task_skill_prior = absl::GetFlag(FLAGS_task_skill_prior);
   config->loop_clips = absl::GetFlag(FLAGS_loop_clips);
+  config->init_from = absl::GetFlag(FLAGS_init_from);
+  config->train_parts = absl::GetFlag(FLAGS_train_parts);
   if (const std::vector<std::string> hidden = absl::GetFlag(FLAGS_task_hidden); !hidden.empty()) {
     config->model.task_hidden.clear();
     for (const std::string& size : hidden) {

@@ -66,7 +66,7 @@ absl::Status SetUpFamily(EnvContext& context, EnvSpec* spec) {
       !status.ok()) {
     return status;
   }
-  auto family = MakeFamilyContext(env.family, *context.humanoid, context.motions->clip(0));
+  auto family = MakeFamilyContext(env.family, context.humanoid, context.motions->clip(0));
   if (!family.ok()) return family.status();
   context.family = *std::move(family);
   // Lee et al. reward tracking and the task only. An energy penalty makes every step of a hard

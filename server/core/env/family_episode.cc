@@ -14,16 +14,9 @@
 namespace modskill {
 namespace {
 
-// Parameters that need a model per body proportion (HumanoidSpec::Scaled), which no env builds yet.
-constexpr const char* kNotOffered[] = {"leg_scale", "arm_scale"};
 constexpr const char* kEffectorBodies[] = {"R_Ankle", "L_Ankle", "R_Wrist", "L_Wrist"};
 constexpr double kObstacleHalfDepth = 0.05, kObstacleHalfWidth = 1.0;  // m
 constexpr double kDefaultObstacleHeight = 0.1;                         // m
-
-bool Offered(absl::string_view name) {
-  return std::none_of(std::begin(kNotOffered), std::end(kNotOffered),
-                      [name](const char* missing) { return name == missing; });
-}
 
 int IndexOf(const std::vector<ParamRange>& ranges, absl::string_view name) {
   for (size_t i = 0; i < ranges.size(); ++i) {
@@ -85,11 +78,6 @@ absl::Status ValidateFamilyRanges(absl::Span<const ParamRange> ranges, absl::str
     if (absl::Status valid = ValidateParamRange(range); !valid.ok()) {
       return absl::InvalidArgumentError(absl::StrCat(field, ": ", valid.message()));
     }
-    if (!Offered(range.name)) {
-      return absl::InvalidArgumentError(absl::StrCat(field, ": param ", range.name,
-                                                     " is not offered by this server yet (it needs a model per body "
-                                                     "proportion); Describe lists the offered ones"));
-    }
     if (!seen.insert(range.name).second) {
       return absl::InvalidArgumentError(absl::StrCat(field, ": param ", range.name, " is given twice"));
     }
@@ -99,9 +87,7 @@ absl::Status ValidateFamilyRanges(absl::Span<const ParamRange> ranges, absl::str
 
 std::vector<FamilyParameterInfo> OfferedFamilyParameters() {
   std::vector<FamilyParameterInfo> offered;
-  for (const FamilyParameterInfo& info : FamilyParameterCatalog()) {
-    if (Offered(info.name)) offered.push_back(info);
-  }
+  for (const FamilyParameterInfo& info : FamilyParameterCatalog()) offered.push_back(info);
   return offered;
 }
 
@@ -124,8 +110,9 @@ absl::Status ValidateFamilySession(absl::Span<const ParamRange> ranges, absl::st
 }
 
 absl::StatusOr<std::shared_ptr<const FamilyContext>> MakeFamilyContext(std::vector<ParamRange> ranges,
-                                                                       const HumanoidModel& humanoid,
+                                                                       std::shared_ptr<const HumanoidModel> shared,
                                                                        const MotionClip& clip) {
+  const HumanoidModel& humanoid = *shared;
   auto family = std::make_shared<FamilyContext>();
   family->gravity = IndexOf(ranges, "gravity");
   family->body_mass_scale = IndexOf(ranges, "body_mass_scale");
@@ -133,6 +120,16 @@ absl::StatusOr<std::shared_ptr<const FamilyContext>> MakeFamilyContext(std::vect
   family->target_height = IndexOf(ranges, "target_height");
   family->obstacle_height = IndexOf(ranges, "obstacle_height");
   family->obstacle_distance = IndexOf(ranges, "obstacle_distance");
+  family->leg_scale = IndexOf(ranges, "leg_scale");
+  family->arm_scale = IndexOf(ranges, "arm_scale");
+  if (family->leg_scale >= 0 || family->arm_scale >= 0) {
+    family->body_models = std::make_shared<FamilyBodyModels>(shared);
+    // The largest bodies of the ranges, built now: a model that cannot be copied into an env's
+    // fails the session here, not an episode later.
+    const double leg = family->leg_scale >= 0 ? ranges[family->leg_scale].hi : 1.0;
+    const double arm = family->arm_scale >= 0 ? ranges[family->arm_scale].hi : 1.0;
+    if (auto model = family->body_models->Get(leg, arm); !model.ok()) return model.status();
+  }
   const mjModel* model = humanoid.model();
   if (FamilyNeedsObstacle(ranges)) {
     family->obstacle_geom = mj_name2id(model, mjOBJ_GEOM, kFamilyObstacleName);
@@ -169,15 +166,11 @@ double PhaseStep(float tau) { return std::exp(std::clamp(1.5 * static_cast<doubl
 
 FamilyEpisode::FamilyEpisode(const FamilyContext* family, const mjModel* base)
     : family_(family), base_(base), model_(mj_copyModel(nullptr, base)) {
-  // Position servos (one per hinge, in hinge order) clamp to the paper's limits; stable PD reads
-  // them through PdController::UseTorqueLimits.
-  if (model_->nu == static_cast<int>(family->hinge_torque_limit.size())) {
-    for (int a = 0; a < model_->nu; ++a) {
-      model_->actuator_forcelimited[a] = 1;
-      model_->actuator_forcerange[2 * a] = -family->hinge_torque_limit[a];
-      model_->actuator_forcerange[2 * a + 1] = family->hinge_torque_limit[a];
-    }
-  }
+  ApplyTorqueLimits();
+  if (family->body_models != nullptr) scaled_clip_ = std::make_shared<MotionClip>();
+  root_start_height_ = family->root_start_height;
+  effector_start_height_ = family->effector_start_height;
+  foot_contact_height_ = family->foot_contact_height;
   a_.assign(family->ranges.size(), 0.f);
   next_.assign(family->ranges.size(), 0.f);
   foot_speeds_.reserve(family->feet.size());
@@ -187,12 +180,23 @@ FamilyEpisode::FamilyEpisode(const FamilyContext* family, const mjModel* base)
 
 FamilyEpisode::~FamilyEpisode() { mj_deleteModel(model_); }
 
+void FamilyEpisode::ApplyTorqueLimits() {
+  // Position servos (one per hinge, in hinge order) clamp to the paper's limits; stable PD reads
+  // them through PdController::UseTorqueLimits.
+  if (model_->nu != static_cast<int>(family_->hinge_torque_limit.size())) return;
+  for (int a = 0; a < model_->nu; ++a) {
+    model_->actuator_forcelimited[a] = 1;
+    model_->actuator_forcerange[2 * a] = -family_->hinge_torque_limit[a];
+    model_->actuator_forcerange[2 * a + 1] = family_->hinge_torque_limit[a];
+  }
+}
+
 void FamilyEpisode::SetNext(const float* a) {
   std::copy_n(a, next_.size(), next_.begin());
   has_next_ = true;
 }
 
-void FamilyEpisode::Begin(const MotionClip& clip, int frame, std::mt19937_64& rng) {
+absl::Status FamilyEpisode::Begin(const MotionClip& clip, int frame, std::mt19937_64& rng) {
   if (has_next_) {
     a_ = next_;
   } else {
@@ -201,24 +205,61 @@ void FamilyEpisode::Begin(const MotionClip& clip, int frame, std::mt19937_64& rn
       a_[i] = static_cast<float>(std::uniform_real_distribution<double>(range.lo, range.hi)(rng));
     }
   }
-  ApplyToModel(clip);
+  const absl::Status applied = ApplyToModel(clip);
   phase_ = frame;
   prev_root_vz_ = prev_effector_vz_ = 0;
   std::fill(prev_foot_contact_.begin(), prev_foot_contact_.end(), 0);
   jump_scored_ = target_scored_ = touched_obstacle_ = false;
   r_jump_ = r_target_ = 0;
   fitness_ = FitnessAccumulator();
+  return applied;
 }
 
-void FamilyEpisode::ApplyToModel(const MotionClip& clip) {
+absl::Status FamilyEpisode::UseBodyProportions(const MotionClip& clip) {
+  const double leg = Param(family_->leg_scale, 1.0), arm = Param(family_->arm_scale, 1.0);
+  auto model = family_->body_models->Get(leg, arm);
+  if (!model.ok()) return model.status();
+  // Same layout (FamilyBodyModels checks): the numbers are copied into this env's buffer.
+  mj_copyModel(model_, (*model)->model());
+  ApplyTorqueLimits();
+  if (absl::Status status = ScaleClip(clip, (*model)->spec(), leg, scaled_clip_.get()); !status.ok()) return status;
+  body_model_ = *std::move(model);
+  // The heights a peak must clear are the scaled clip's.
+  root_start_height_ = scaled_clip_->body_pos[0].z();
+  effector_start_height_ = 0;
+  for (int e : family_->effectors) effector_start_height_ = std::max(effector_start_height_, scaled_clip_->body_pos[e].z());
+  for (size_t f = 0; f < family_->feet.size(); ++f) {
+    foot_contact_height_[f] = scaled_clip_->body_pos[family_->feet[f]].z() + 0.03;
+  }
+  return absl::OkStatus();
+}
+
+absl::Status FamilyEpisode::ApplyToModel(const MotionClip& clip) {
+  absl::Status proportions;
+  const mjModel* shape = base_;  // the masses a body_mass_scale multiplies
+  if (family_->body_models != nullptr) {
+    proportions = UseBodyProportions(clip);
+    if (proportions.ok()) {
+      shape = body_model_->model();
+    } else {
+      // The session's own body then: its numbers back in this env's copy.
+      body_model_ = nullptr;
+      mj_copyModel(model_, base_);
+      ApplyTorqueLimits();
+      root_start_height_ = family_->root_start_height;
+      effector_start_height_ = family_->effector_start_height;
+      foot_contact_height_ = family_->foot_contact_height;
+    }
+  }
   model_->opt.gravity[2] = -Param(family_->gravity, -base_->opt.gravity[2]);
   const double mass_scale = Param(family_->body_mass_scale, 1.0);
-  for (int b = 0; b < base_->nbody; ++b) {
-    model_->body_mass[b] = base_->body_mass[b] * mass_scale;
-    model_->body_subtreemass[b] = base_->body_subtreemass[b] * mass_scale;
-    for (int k = 0; k < 3; ++k) model_->body_inertia[3 * b + k] = base_->body_inertia[3 * b + k] * mass_scale;
+  for (int b = 0; b < shape->nbody; ++b) {
+    model_->body_mass[b] = shape->body_mass[b] * mass_scale;
+    model_->body_subtreemass[b] = shape->body_subtreemass[b] * mass_scale;
+    for (int k = 0; k < 3; ++k) model_->body_inertia[3 * b + k] = shape->body_inertia[3 * b + k] * mass_scale;
   }
-  if (family_->obstacle_geom >= 0) PlaceObstacle(clip);
+  if (family_->obstacle_geom >= 0) PlaceObstacle(body_model_ ? *scaled_clip_ : clip);
+  return proportions;
 }
 
 void FamilyEpisode::PlaceObstacle(const MotionClip& clip) {
@@ -265,13 +306,13 @@ FamilyStepScore FamilyEpisode::Score(const HumanoidState& sim, const HumanoidSta
   FamilyStepScore score;
   const double time_error = phase_step - 1.0;
   score.time_reward = static_cast<float>(kFamilyTimeWeight * std::exp(-time_error * time_error / kFamilyTimeSigma));
-  score.spike += PeakSpike(sim.body_pos[0].z(), sim.body_vel[0].z(), family_->root_start_height + 0.05,
+  score.spike += PeakSpike(sim.body_pos[0].z(), sim.body_vel[0].z(), root_start_height_ + 0.05,
                            family_->jump_height, &prev_root_vz_, &jump_scored_, &r_jump_);
   int highest = family_->effectors[0];
   for (int e : family_->effectors) {
     if (sim.body_pos[e].z() > sim.body_pos[highest].z()) highest = e;
   }
-  score.spike += PeakSpike(sim.body_pos[highest].z(), sim.body_vel[highest].z(), family_->effector_start_height + 0.2,
+  score.spike += PeakSpike(sim.body_pos[highest].z(), sim.body_vel[highest].z(), effector_start_height_ + 0.2,
                            family_->target_height, &prev_effector_vz_, &target_scored_, &r_target_);
   for (int c = 0; c < data->ncon && family_->obstacle_geom >= 0; ++c) {
     const mjContact& contact = data->contact[c];
@@ -300,8 +341,8 @@ void FamilyEpisode::AddFitnessFrame(const HumanoidState& sim, const HumanoidStat
   foot_speeds_.clear();
   for (size_t f = 0; f < family_->feet.size(); ++f) {
     const int body = family_->feet[f];
-    const bool sim_contact = sim.body_pos[body].z() < family_->foot_contact_height[f];
-    const bool reference_contact = reference.body_pos[body].z() < family_->foot_contact_height[f];
+    const bool sim_contact = sim.body_pos[body].z() < foot_contact_height_[f];
+    const bool reference_contact = reference.body_pos[body].z() < foot_contact_height_[f];
     // Graded, as in the authors' code: how far the foot is from where the reference has it (in
     // height, x5), counted where either foot is on the floor. A binary mismatch count punished
     // a foot 1 mm over the contact height like one in the air (F 0.35 for the clip's own motion).

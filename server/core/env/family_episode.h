@@ -13,6 +13,8 @@
 //                      is 20 cm above its start; default: the clip's own highest effector
 //   obstacle_height    a static box across the clip's start heading, 2 m wide, 10 cm deep;
 //   obstacle_distance  its distance from the start root; defaults 0.1 m and half the clip's travel
+//   leg_scale          the legs' lengths and radii (family_body_models.h), and the reference: the
+//   arm_scale          clip on the scaled skeleton, its root's travel scaled by leg_scale
 // r_constraint (the fitness's constraint term) is the product of the episode's constraint
 // rewards (each peak's exp term; the obstacle: 1 untouched, 0 touched), 0 for none.
 #ifndef MODSKILL_SERVER_CORE_ENV_FAMILY_EPISODE_H_
@@ -31,6 +33,7 @@
 #include "common/policy/family_fitness.h"
 #include "common/policy/family_parameters.h"
 #include "server/core/env/env_spec.h"
+#include "server/core/env/family_body_models.h"
 #include "server/core/env/humanoid_state.h"
 #include "server/core/motion/motion_clip.h"
 #include "server/core/sim/humanoid_model.h"
@@ -50,6 +53,9 @@ struct FamilyContext {
   // Index into a of each parameter, -1 when the session does not vary it.
   int gravity = -1, body_mass_scale = -1, jump_height = -1, target_height = -1;
   int obstacle_height = -1, obstacle_distance = -1;
+  int leg_scale = -1, arm_scale = -1;
+  // The scaled humanoids, with leg_scale or arm_scale; null otherwise.
+  std::shared_ptr<FamilyBodyModels> body_models;
   int obstacle_geom = -1;               // MuJoCo geom id; -1 without obstacle parameters
   std::vector<char> humanoid_geom;      // per MuJoCo geom: a body of the humanoid's
   std::vector<int> feet;                // spec body indices
@@ -63,9 +69,8 @@ struct FamilyContext {
   double control_dt = 0;                // s, one control step (the physics substeps it holds)
 };
 
-// The ranges this server can run: the catalog's checks (ValidateParamRange), no name twice, and
-// only parameters it implements (leg_scale and arm_scale need a model per body proportion, not
-// built yet). INVALID_ARGUMENT naming the parameter, under `field`.
+// The ranges this server can run: the catalog's checks (ValidateParamRange) and no name twice.
+// INVALID_ARGUMENT naming the parameter, under `field`.
 absl::Status ValidateFamilyRanges(absl::Span<const ParamRange> ranges, absl::string_view field);
 // The catalog entries this server offers (Describe).
 std::vector<FamilyParameterInfo> OfferedFamilyParameters();
@@ -77,9 +82,9 @@ absl::Status ValidateFamilySession(absl::Span<const ParamRange> ranges, absl::st
                                    TaskKind task, ActionMode action_mode, bool loop_clips);
 
 // The context of a family session over its one clip (ranges checked: ValidateFamilySession);
-// `model` must hold the obstacle geom when FamilyNeedsObstacle.
+// `humanoid` must hold the obstacle geom when FamilyNeedsObstacle.
 absl::StatusOr<std::shared_ptr<const FamilyContext>> MakeFamilyContext(std::vector<ParamRange> ranges,
-                                                                       const HumanoidModel& humanoid,
+                                                                       std::shared_ptr<const HumanoidModel> humanoid,
                                                                        const MotionClip& clip);
 
 // A tracking spec made a family's: goal_obs = [a normalized | phase / last frame], one more
@@ -110,8 +115,14 @@ class FamilyEpisode {
   const std::vector<double>& torque_limits() const { return family_->hinge_torque_limit; }
   // The next episode's a (one value per range, inside it: EnvBatch::SetFamilyParameters checks).
   void SetNext(const float* a);
-  // Starts an episode on `clip` at `frame`: a is the pending SetNext row or a uniform draw.
-  void Begin(const MotionClip& clip, int frame, std::mt19937_64& rng);
+  // Starts an episode on `clip` at `frame`: a is the pending SetNext row or a uniform draw. With
+  // body proportions in a, the episode's humanoid and clip are the scaled ones (body_model(),
+  // scaled_clip()); a failure to build them leaves the unscaled ones and is returned.
+  absl::Status Begin(const MotionClip& clip, int frame, std::mt19937_64& rng);
+  // The episode's scaled humanoid and clip (kinematics and reference), or null at the session's
+  // own proportions.
+  const HumanoidModel* body_model() const { return body_model_.get(); }
+  std::shared_ptr<const MotionClip> scaled_clip() const { return body_model_ ? scaled_clip_ : nullptr; }
   double phase() const { return phase_; }
   // Advances the phase by PhaseStep(tau), stopping at `last_frame`; returns the step taken.
   double Advance(float tau, int last_frame);
@@ -127,7 +138,9 @@ class FamilyEpisode {
 
  private:
   double Param(int index, double default_value) const { return index >= 0 ? a_[index] : default_value; }
-  void ApplyToModel(const MotionClip& clip);
+  absl::Status ApplyToModel(const MotionClip& clip);
+  absl::Status UseBodyProportions(const MotionClip& clip);
+  void ApplyTorqueLimits();
   void PlaceObstacle(const MotionClip& clip);
   float PeakSpike(double height, double vertical_velocity, double threshold, int param, double* prev_velocity,
                   bool* scored, double* constraint) const;
@@ -146,6 +159,10 @@ class FamilyEpisode {
   std::vector<double> foot_speeds_;  // scratch: speeds of the feet in contact
   std::vector<Vec3> prev_foot_pos_;   // per foot, at the previous control step
   std::vector<char> prev_foot_contact_;
+  std::shared_ptr<const HumanoidModel> body_model_;  // the episode's scaled humanoid, or null
+  std::shared_ptr<MotionClip> scaled_clip_;          // the clip on it (buffers kept across episodes)
+  double root_start_height_ = 0, effector_start_height_ = 0;  // the episode's clip's
+  std::vector<double> foot_contact_height_;                   // per foot, the episode's clip's
 };
 
 }  // namespace modskill

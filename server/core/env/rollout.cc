@@ -127,10 +127,11 @@ absl::StatusOr<std::vector<ClipRolloutMetrics>> RunRollout(std::shared_ptr<const
   ref.Resize(humanoid->num_bodies(), humanoid->num_hinges());
   // Measures env i's current frame and shows it with the z the policy acted on from it.
   auto record = [&](int i, bool is_done, bool is_terminated, const float* z) {
-    const MotionClip& clip = motions->clip(clip_ids[i]);
-    ReadSimulatedState(*humanoid, batch.env(i).data(), &sim);
-    // A family's reference is the clip at its warped phase.
+    // A family's reference is the clip at its warped phase, on the episode's own skeleton.
     const FamilyEpisode* episode = batch.env(i).family();
+    const MotionClip& clip = batch.env(i).motion();
+    const HumanoidModel& kinematics = episode != nullptr && episode->body_model() ? *episode->body_model() : *humanoid;
+    ReadSimulatedState(kinematics, batch.env(i).data(), &sim);
     if (episode != nullptr) {
       ReadReferenceStateAt(clip, episode->phase(), &ref);
       meters[i].Observe(sim);

@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "absl/strings/str_cat.h"
+#include "common/log.h"
 #include "server/core/env/base_motion_anchor.h"
 #include "server/core/env/observation.h"
 
@@ -14,7 +15,8 @@ namespace modskill {
 TrackingEnv::TrackingEnv(const EnvContext* context, uint64_t seed)
     : context_(context),
       goal_task_(MakeGoalTask(context->spec->task, &context->goal_task)),
-      data_(mj_makeData(context->humanoid->model())), pd_(*context->humanoid), rng_(seed) {
+      data_(mj_makeData(context->humanoid->model())), pd_(*context->humanoid), rng_(seed),
+      kinematics_(context->humanoid.get()) {
   const int bodies = context->humanoid->num_bodies(), hinges = context->humanoid->num_hinges();
   sim_.Resize(bodies, hinges);
   reference_.Resize(bodies, hinges);
@@ -44,17 +46,27 @@ void TrackingEnv::Reset(EnvRow row) {
 
 void TrackingEnv::ResetTo(int clip, int frame, EnvRow row) {
   motion_ = context_->motions->shared_clip(clip);
-  const MotionClip& motion = *motion_;
+  kinematics_ = context_->humanoid.get();
   clip_ = context_->clip_ids.empty() ? clip : context_->clip_ids[clip];
-  frame_ = std::clamp(frame, 0, motion.num_frames - 2);
+  frame_ = std::clamp(frame, 0, motion_->num_frames - 2);
   episode_steps_ = 0;
   loop_motion_ = PlanarMotion();
-  if (LoopsClip()) cycle_motion_ = ClipCycleMotion(motion);
+  if (LoopsClip()) cycle_motion_ = ClipCycleMotion(*motion_);
   finished_ = false;
-  if (family_ != nullptr) family_->Begin(motion, frame_, rng_);
-  SetSimulationToReference(*context_->humanoid, motion, frame_, data_);
+  if (family_ != nullptr) {
+    if (absl::Status status = family_->Begin(*motion_, frame_, rng_); !status.ok()) {
+      LogLine("family episode at the session's own body proportions: %s", std::string(status.message()));
+    }
+    // At other body proportions the episode tracks the clip on its own skeleton.
+    if (family_->body_model() != nullptr) {
+      motion_ = family_->scaled_clip();
+      kinematics_ = family_->body_model();
+    }
+  }
+  const MotionClip& motion = *motion_;
+  SetSimulationToReference(*kinematics_, motion, frame_, data_);
   if (goal_task_ != nullptr) {
-    ReadSimulatedState(*context_->humanoid, data_, &sim_);
+    ReadSimulatedState(*kinematics_, data_, &sim_);
     goal_task_->Reset(sim_, data_, rng_);
   }
   // AMP history starts as the reference's own recent past.
@@ -79,7 +91,7 @@ bool TrackingEnv::PhysicsDiverged() const {
 }
 
 TrackingErrors TrackingEnv::CurrentTrackingTerms(float* terms) {
-  ReadSimulatedState(*context_->humanoid, data_, &sim_);
+  ReadSimulatedState(*kinematics_, data_, &sim_);
   ReadReferenceState(*motion_, frame_, &reference_);
   if (LoopsClip()) loop_motion_.Apply(&reference_);
   return ComputeImitationTerms(context_->config.reward, sim_, reference_, terms, body_distance_.data());
@@ -184,7 +196,7 @@ TrackingErrors TrackingEnv::VrErrors() const {
 void TrackingEnv::ScoreGoalTask(float* terms, EnvRow row) {
   BatchBuffers& out = *row.buffers;
   const int i = row.index;
-  ReadSimulatedState(*context_->humanoid, data_, &sim_);
+  ReadSimulatedState(*kinematics_, data_, &sim_);
   goal_task_->Reward(sim_, data_, terms);
   // No reference to be far from: the errors say nothing in a goal task.
   out.max_body_error[i] = 0.f;
@@ -266,7 +278,7 @@ void TrackingEnv::WriteObservation(EnvRow row) {
   BatchBuffers& out = *row.buffers;
   const int i = row.index;
   float* obs = &out.obs[static_cast<size_t>(i) * spec.obs_size];
-  ReadSimulatedState(*context_->humanoid, data_, &sim_);
+  ReadSimulatedState(*kinematics_, data_, &sim_);
   if (family_ != nullptr) {
     WriteFamilyObservation(obs, row);
   } else if (goal_task_ != nullptr) {

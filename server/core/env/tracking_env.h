@@ -105,6 +105,8 @@ class TrackingEnv {
   // The reported id of the episode's clip (see EnvContext::clip_ids).
   int clip() const { return clip_; }
   int frame() const { return frame_; }
+  // The clip the episode tracks (a family at other body proportions: the clip on its skeleton).
+  const MotionClip& motion() const { return *motion_; }
   // With auto_reset off: the episode has ended and the env waits for a reset.
   bool finished() const { return finished_; }
   int64_t physics_resets() const { return physics_resets_; }
@@ -160,6 +162,9 @@ class TrackingEnv {
   // The episode's clip, held so that the library can be replaced between steps (generated clips
   // joining or leaving) without disturbing an episode in progress.
   std::shared_ptr<const MotionClip> motion_;
+  // Whose skeleton the simulated state is read with: the session's humanoid, or a family
+  // episode's at other body proportions.
+  const HumanoidModel* kinematics_ = nullptr;
   int clip_ = 0;
   // A looping clip: where the current cycle's reference lies, and the clip's own displacement per
   // cycle.

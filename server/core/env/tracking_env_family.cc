@@ -39,7 +39,7 @@ void TrackingEnv::StepFamily(const float* action, EnvRow row) {
     return;
   }
   float* terms = &out.reward_terms[static_cast<size_t>(i) * out.widths.reward_terms];
-  ReadSimulatedState(*context_->humanoid, data_, &sim_);
+  ReadSimulatedState(*kinematics_, data_, &sim_);
   const TrackingErrors errors =
       ComputeImitationTerms(config.reward, sim_, reference_, terms, body_distance_.data());
   WriteErrors(errors, row);

@@ -1,0 +1,114 @@
+// Retraining some parts of a tracker (issue 13 item 4, learner/part_retraining.h): from the shipped
+// walk tracker, only the arms train on the punch; every other part's controller and attention maps
+// and the observation statistics come out of training bit for bit as they went in, the arms'
+// do not; bad --init_from and --train_parts are named.
+#include <filesystem>
+#include <string>
+
+#include <gmock/gmock.h>
+
+#include "learner/policy_import.h"
+#include "learner/trainer.h"
+#include "tests/server_fixture.h"
+#include "tests/trainer_test_config.h"
+
+namespace modskill::learner {
+namespace {
+
+using ::testing::HasSubstr;
+
+const std::string kWalkTracker = std::string(MODSKILL_REPO_DIR) + "/data/policies/walk_small/policy.pt";
+
+TrainerConfig RetrainArms(const RunningServer& server, const std::string& name) {
+  const std::string dir = std::string(MODSKILL_TEST_TMP_DIR) + "/part_retraining/" + name;
+  std::filesystem::remove_all(dir);
+  TrainerConfig config = SmallTestTrainerConfig({absl::StrCat("127.0.0.1:", server.port())}, dir);
+  config.motions = {"deepmimic_punch"};
+  config.init_from = kWalkTracker;
+  config.train_parts = {"R_Arm", "L_Arm"};
+  return config;
+}
+
+// Whether every tensor of `prefix` (part<p>_controller, part<p>_key, ...) is the same in both files.
+bool SameTensors(const ExportedPolicy& a, const ExportedPolicy& b, const std::string& prefix) {
+  int compared = 0;
+  for (const auto& [name, tensor] : a.tensors) {
+    if (name.rfind(prefix, 0) != 0) continue;
+    if (!b.Has(name) || !torch::equal(tensor, b.tensors.at(name))) return false;
+    ++compared;
+  }
+  EXPECT_GT(compared, 0) << prefix;
+  return compared > 0;
+}
+
+TEST(PartRetrainingTest, OnlyTheNamedPartsTrain) {
+  auto server = StartTestServer();
+  TrainerConfig config = RetrainArms(*server, "arms");
+  auto trainer = Trainer::Create(config);
+  ASSERT_TRUE(trainer.ok()) << trainer.status();
+  ASSERT_TRUE((*trainer)->Run().ok());
+  auto before = ReadExportedPolicy(kWalkTracker);
+  auto after = ReadExportedPolicy(config.run_dir + "/policy.pt");
+  ASSERT_TRUE(before.ok() && after.ok());
+  // 5part: L_Leg, R_Leg, Torso, L_Arm, R_Arm (the server's order).
+  auto env = ConnectTo(*server)->Describe();
+  ASSERT_TRUE(env.ok());
+  for (int p = 0; p < env->parts_size(); ++p) {
+    const bool trained = env->parts(p).name() == "R_Arm" || env->parts(p).name() == "L_Arm";
+    for (const char* role : {"controller", "key", "query", "value"}) {
+      const std::string prefix = absl::StrCat("part", p, "_", role);
+      EXPECT_EQ(SameTensors(*before, *after, prefix), !trained) << env->parts(p).name() << " " << prefix;
+    }
+  }
+  EXPECT_TRUE(torch::equal(before->tensors.at("obs_mean"), after->tensors.at("obs_mean")));
+  EXPECT_TRUE(torch::equal(before->tensors.at("obs_var"), after->tensors.at("obs_var")));
+
+  // Resumed, the frozen parts stay frozen.
+  config.resume = true;
+  config.iterations = 1;
+  auto resumed = Trainer::Create(config);
+  ASSERT_TRUE(resumed.ok()) << resumed.status();
+  ASSERT_TRUE((*resumed)->Run().ok());
+  auto again = ReadExportedPolicy(config.run_dir + "/policy.pt");
+  ASSERT_TRUE(again.ok());
+  for (int p = 0; p < env->parts_size(); ++p) {
+    const std::string prefix = absl::StrCat("part", p, "_controller");
+    if (env->parts(p).name() == "R_Arm") {
+      EXPECT_FALSE(SameTensors(*after, *again, prefix));
+    } else if (env->parts(p).name() != "L_Arm") {
+      EXPECT_TRUE(SameTensors(*before, *again, prefix));
+    }
+  }
+}
+
+TEST(PartRetrainingTest, BadSettingsAreNamed) {
+  auto server = StartTestServer();
+  TrainerConfig unknown = RetrainArms(*server, "bad");
+  unknown.train_parts = {"R_Arm", "Tail"};
+  auto refused = Trainer::Create(unknown);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_THAT(std::string(refused.status().message()), HasSubstr("--train_parts[1]: 'Tail'"));
+
+  TrainerConfig twice = RetrainArms(*server, "bad");
+  twice.train_parts = {"R_Arm", "R_Arm"};
+  EXPECT_THAT(std::string(Trainer::Create(twice).status().message()), HasSubstr("given twice"));
+
+  TrainerConfig absolute = RetrainArms(*server, "bad");
+  absolute.action_mode = "absolute";
+  auto mode = Trainer::Create(absolute);
+  EXPECT_EQ(mode.status().code(), absl::StatusCode::kFailedPrecondition);
+  EXPECT_THAT(std::string(mode.status().message()), HasSubstr("--init_from"));
+
+  TrainerConfig missing = RetrainArms(*server, "bad");
+  missing.init_from = "/nonexistent/policy.pt";
+  EXPECT_THAT(std::string(Trainer::Create(missing).status().message()), HasSubstr("--init_from"));
+
+  TrainerConfig no_tracker = RetrainArms(*server, "bad");
+  no_tracker.init_from.clear();
+  auto needs = Trainer::Create(no_tracker);
+  EXPECT_EQ(needs.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(std::string(needs.status().message()), HasSubstr("--train_parts: needs --init_from"));
+}
+
+}  // namespace
+}  // namespace modskill::learner
