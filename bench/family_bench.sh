@@ -11,7 +11,8 @@
 # Then the exported DIR/run/policy.pt goes through the server as a user would run it:
 # DIR/rollout_<value>.json (modskill-client rollout --param NAME=VALUE, the first varied
 # parameter), DIR/rollout.html (the viewer page at the first value) and DIR/family_query.json
-# (modskill-client family: the ranges, P(a) at the middle and the nearest elites).
+# (modskill-client family: the ranges, P(a) at the middle and the nearest elites), and
+# DIR/rollouts.md: per value, the root's apex, mean height, travel and speed, the flight time and F.
 set -euo pipefail
 repo="$(cd "$(dirname "$0")/.." && pwd)"
 BUILD="${MODSKILL_BUILD_DIR:-$repo/build}"
@@ -68,7 +69,26 @@ client="$BUILD/client/modskill-client"
 html=(--html "$OUT/rollout.html")
 for value in ${eval_values//,/ }; do
   "$client" --server "127.0.0.1:$port" rollout --checkpoint "$OUT/run/policy.pt" --param "$first_param=$value" \
-      --out "$OUT/rollout_$value.json" "${html[@]}" | grep -E "^family at|wrote"
+      --frames --out "$OUT/rollout_$value.json" "${html[@]}" | grep -E "^family at|wrote"
   html=()
 done
 "$client" --server "127.0.0.1:$port" family --checkpoint "$OUT/run/policy.pt" --out "$OUT/family_query.json"
+
+# What the motion did at each value, from the server's frames: the root's apex and mean height,
+# the distance it travelled and its speed, the flight time and F (DIR/rollouts.md).
+/usr/bin/python3 - "$OUT" "$first_param" ${eval_values//,/ } <<'PY'
+import json, math, sys
+out, name, values = sys.argv[1], sys.argv[2], sys.argv[3:]
+lines = [f"| {name} | root apex (m) | mean root height (m) | root travel (m) | speed (m/s) | flight (s) | F | clip frames played |",
+         "|---|---|---|---|---|---|---|---|"]
+for value in values:
+    clip = json.load(open(f"{out}/rollout_{value}.json"))["clips"][0]
+    root = [frame["sim_body_pos"][0] for frame in clip["frames"]]
+    travel = math.dist(root[0][:2], root[-1][:2])
+    seconds = max(len(root) - 1, 1) / 30.0
+    family = clip["family"]
+    lines.append(f"| {value} | {family['apex_height_m']:.3f} | {sum(p[2] for p in root) / len(root):.3f} | {travel:.3f} | "
+                 f"{travel / seconds:.2f} | {family['flight_s']:.2f} | {family['fitness']:.3f} | {family['final_phase']:.1f} |")
+open(f"{out}/rollouts.md", "w").write("\n".join(lines) + "\n")
+print("\n".join(lines))
+PY

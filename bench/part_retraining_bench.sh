@@ -1,16 +1,22 @@
 #!/usr/bin/env bash
 # A new part without retraining the rest (issue 13 item 4): from a tracker, retrain only some
-# parts on new clips while the others stay frozen, beside the same tracker continued with every
+# parts on new clips while the others stay frozen (their controllers and attention maps, or their
+# controllers alone with --train_attention=false), beside the same tracker continued with every
 # part training, side by side (bench/learning_bench.sh: same seed, same clips, same wall-clock
 # budget); then each policy and the tracker it started from are rolled out on the new clips and
 # on the tracker's own, and their per-part errors are tabulated (DIR/parts.md, DIR/parts.json).
 #
 #   bench/part_retraining_bench.sh --out DIR [--minutes 15] [--tracker data/policies/walk_small/policy.pt]
-#       [--parts R_Arm,L_Arm] [--new deepmimic_punch] [--old deepmimic_walk]
+#       [--parts R_Arm,L_Arm] [--new deepmimic_punch] [--old deepmimic_walk] [--eval_only]
+#
+# Per part: the error of its bodies relative to the root (the part's own motion, without the
+# drift of the whole body), averaged over the steps each rollout tracked. --eval_only evaluates
+# the policies of an earlier run in DIR.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD="${MODSKILL_BUILD_DIR:-build}"
 OUT="" MINUTES=15 TRACKER=data/policies/walk_small/policy.pt PARTS=R_Arm,L_Arm NEW=deepmimic_punch OLD=deepmimic_walk
+EVAL_ONLY=""
 while (($#)); do
   case "$1" in
     --out) OUT="$2"; shift 2 ;;
@@ -19,34 +25,54 @@ while (($#)); do
     --parts) PARTS="$2"; shift 2 ;;
     --new) NEW="$2"; shift 2 ;;
     --old) OLD="$2"; shift 2 ;;
+    --eval_only) EVAL_ONLY=1; shift ;;
     -h|--help) sed -n 2,9p "$0"; exit 0 ;;
     *) echo "error: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
 [ -n "$OUT" ] || { echo "error: --out DIR is required" >&2; exit 2; }
 mkdir -p "$OUT"
-bench/learning_bench.sh --out "$OUT" --minutes "$MINUTES" --motions "$NEW" --server_flags "--no_generative" \
-    parts="--init_from $TRACKER --train_parts $PARTS" every_part="--init_from $TRACKER"
+[ -n "$EVAL_ONLY" ] || bench/learning_bench.sh --out "$OUT" --minutes "$MINUTES" --motions "$NEW" --server_flags "--no_generative" \
+    parts="--init_from $TRACKER --train_parts $PARTS" \
+    parts_controllers="--init_from $TRACKER --train_parts $PARTS --train_attention=false" \
+    every_part="--init_from $TRACKER"
 
 source bench/side_by_side.sh  # free_port, stop_servers at exit
 port=$(free_port)
 "$BUILD/server/modskill-server" --port "$port" --threads 1 > "$OUT/eval_server.log" 2>&1 &
 SERVERS+=($!)
 sleep 2
-for policy in tracker:"$TRACKER" parts:"$OUT/parts/policy.pt" every_part:"$OUT/every_part/policy.pt"; do
+for policy in tracker:"$TRACKER" parts:"$OUT/parts/policy.pt" parts_controllers:"$OUT/parts_controllers/policy.pt" \
+    every_part:"$OUT/every_part/policy.pt"; do
   name="${policy%%:*}"
+  [ -f "${policy#*:}" ] || continue
   "$BUILD/client/modskill-client" --server "127.0.0.1:$port" --timeout_s 30 rollout --checkpoint "${policy#*:}" \
-      --clip "$NEW,$OLD" --out "$OUT/rollout_$name.json" > /dev/null
+      --clip "$NEW,$OLD" --frames --out "$OUT/rollout_$name.json" > /dev/null
 done
-/usr/bin/python3 - "$OUT" "$NEW" "$OLD" "$PARTS" <<'PY'
+PYTHONPATH=client/python /usr/bin/python3 - "$OUT" "$NEW" "$OLD" "$PARTS" "127.0.0.1:$port" <<'PY'
 import json, sys
-out, new, old, parts = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4].split(",")
-rows, table = {}, []
-for name in ("tracker", "parts", "every_part"):
-    clips = {c["clip"]: c for c in json.load(open(f"{out}/rollout_{name}.json"))["clips"]}
-    rows[name] = {clip: {"steps": c["steps"], "success": c["success"], "mpjpe_mm": c["mpjpe_mm"],
-                         "part_error_mm": c["part_error_mm"]} for clip, c in clips.items()}
-part_names = list(rows["tracker"][new]["part_error_mm"])
+import numpy as np
+import modskill
+out, new, old, parts, server = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4].split(",")[:], sys.argv[5]
+with modskill.Client(server) as client:
+    spec = client.describe()
+rows = {}
+import os
+for name in ("tracker", "parts", "parts_controllers", "every_part"):
+    if not os.path.exists(f"{out}/rollout_{name}.json"):
+        continue
+    data = json.load(open(f"{out}/rollout_{name}.json"))
+    index = {body: i for i, body in enumerate(data["body_names"])}
+    rows[name] = {}
+    for c in data["clips"]:
+        sim = np.array([f["sim_body_pos"] for f in c["frames"]])
+        ref = np.array([f["ref_body_pos"] for f in c["frames"]])
+        local = np.linalg.norm((sim - sim[:, :1]) - (ref - ref[:, :1]), axis=-1)  # [T, bodies], m
+        part_error = {p.name: 1000 * float(local[:, [index[b] for b in p.bodies]].mean()) for p in spec.parts}
+        rows[name][c["clip"]] = {"steps": c["steps"], "success": c["success"], "mpjpe_mm": c["mpjpe_mm"],
+                                 "part_error_mm": part_error}
+        c.pop("frames")
+part_names = [p.name for p in spec.parts]
 with open(f"{out}/parts.md", "w") as f:
     head = "| policy | clip | steps | E_mpjpe (mm) | " + " | ".join(f"{p} (mm)" for p in part_names) + " |"
     f.write(head + "\n|" + "---|" * (4 + len(part_names)) + "\n")
@@ -55,8 +81,8 @@ with open(f"{out}/parts.md", "w") as f:
             r = by_clip[clip]
             cells = " | ".join(f"{r['part_error_mm'][p]:.1f}" + (" *" if p in parts else "") for p in part_names)
             f.write(f"| {name} | {clip} | {r['steps']}{' (all)' if r['success'] else ''} | {r['mpjpe_mm']:.1f} | {cells} |\n")
-    f.write(f"\n(* the retrained parts, {', '.join(parts)}; part errors are global body errors averaged over the "
-            "part's bodies, over the steps tracked)\n")
+    f.write(f"\n(* the retrained parts, {', '.join(parts)}; a part's error: its bodies' positions relative to the "
+            "root against the reference's, averaged over its bodies and the steps tracked)\n")
 json.dump(rows, open(f"{out}/parts.json", "w"), indent=1)
 print(open(f"{out}/parts.md").read())
 PY

@@ -39,7 +39,7 @@ absl::StatusOr<std::vector<int>> PartIndices(const std::vector<std::string>& nam
 
 absl::StatusOr<RetrainedTracker> LoadTrackerForRetraining(const std::string& path, const std::vector<std::string>& train_parts,
                                                           const std::string& layout_name, const NetworkLayout& layout,
-                                                          const ActionMapping& action) {
+                                                          const ActionMapping& action, bool train_attention) {
   auto exported = ReadExportedPolicy(path);
   if (!exported.ok()) return absl::Status(exported.status().code(), absl::StrCat("--init_from: ", exported.status().message()));
   const PolicySpec& spec = exported->spec;
@@ -70,6 +70,7 @@ absl::StatusOr<RetrainedTracker> LoadTrackerForRetraining(const std::string& pat
   const SkillAttentionImpl& attention = *policy.attention();
   for (int p : tracker.trained_parts) {
     SetTrainable(*policy.controllers()[p], true);
+    if (!train_attention) continue;
     SetTrainable(*attention.values()[p], true);
     if (attention.uses_attention()) {
       SetTrainable(*attention.keys()[p], true);

@@ -4,7 +4,10 @@
 // controllers and attention maps (key, query, value) train on the new clips while every other
 // part's stay exactly as they were (requires_grad false, so the optimizer leaves them out) and the
 // normalizer keeps the tracker's statistics, so a frozen controller reads what it always read.
-// Without --train_parts every part trains (a tracker continued on new clips).
+// Without --train_parts every part trains (a tracker continued on new clips). With
+// train_attention false the named parts' controllers train alone: every part's z then stays the
+// tracker's (the attention mixes every part's key and value into each part's z, so a retrained
+// map moves the frozen parts' z too).
 #ifndef MODSKILL_LEARNER_PART_RETRAINING_H_
 #define MODSKILL_LEARNER_PART_RETRAINING_H_
 
@@ -31,7 +34,7 @@ struct RetrainedTracker {
 // observation or action mapping than this run's, or when parts are named for a whole-body tracker.
 absl::StatusOr<RetrainedTracker> LoadTrackerForRetraining(const std::string& path, const std::vector<std::string>& train_parts,
                                                           const std::string& layout_name, const NetworkLayout& layout,
-                                                          const ActionMapping& action);
+                                                          const ActionMapping& action, bool train_attention = true);
 
 }  // namespace modskill::learner
 

@@ -177,7 +177,8 @@ absl::Status Trainer::BuildNetworks(const v1::EnvSpec& spec) {
     ActionMapping action;
     action.mode = ParseActionMode(config_.action_mode).value_or(ActionMode::kResidual);
     action.residual_scale = config_.residual_scale;
-    auto tracker = LoadTrackerForRetraining(config_.init_from, config_.train_parts, spec.part_layout(), layout_, action);
+    auto tracker = LoadTrackerForRetraining(config_.init_from, config_.train_parts, spec.part_layout(), layout_, action,
+                                            config_.train_attention);
     if (!tracker.ok()) return tracker.status();
     policy_ = tracker->policy;
     obs_norm_ = tracker->obs_norm;

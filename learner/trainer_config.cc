@@ -25,6 +25,9 @@ absl::Status ValidateTask(const TrainerConfig& c) {
   if (!c.train_parts.empty() && c.init_from.empty()) {
     return absl::InvalidArgumentError("--train_parts: needs --init_from (the tracker whose other parts stay frozen)");
   }
+  if (!c.train_attention && c.train_parts.empty()) {
+    return absl::InvalidArgumentError("--train_attention=false: only with --train_parts");
+  }
   if (!c.init_from.empty() && !IsTrackingTask(c.task)) {
     return absl::InvalidArgumentError(absl::StrCat("--init_from: tracking only, not with --task ", c.task, " (use --skills)"));
   }
@@ -200,6 +203,7 @@ std::string TrainerConfig::ToJson() const {
   if (!init_from.empty()) {
     json["init_from"] = init_from;
     json["train_parts"] = train_parts;
+    json["train_attention"] = train_attention;
   }
   if (!IsTrackingTask(task)) {
     json["skills"] = skills;

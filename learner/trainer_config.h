@@ -59,6 +59,7 @@ struct TrainerConfig {
   // (empty: all); the other parts' controllers and attention maps stay frozen.
   std::string init_from;
   std::vector<std::string> train_parts;
+  bool train_attention = true;  // with train_parts: their attention maps train too
   // Tracking: clips loop (SessionConfig.loop_clips), so that episodes run 300 steps through the
   // clip's seams, as a task's looping base motion later asks of the skills.
   bool loop_clips = false;

@@ -81,6 +81,33 @@ TEST(PartRetrainingTest, OnlyTheNamedPartsTrain) {
   }
 }
 
+// With --train_attention=false the arms' controllers train alone: every attention map is the
+// tracker's, so every part's z is too.
+TEST(PartRetrainingTest, ControllersAloneKeepEveryAttentionMap) {
+  auto server = StartTestServer();
+  TrainerConfig config = RetrainArms(*server, "controllers");
+  config.train_attention = false;
+  auto trainer = Trainer::Create(config);
+  ASSERT_TRUE(trainer.ok()) << trainer.status();
+  ASSERT_TRUE((*trainer)->Run().ok());
+  auto before = ReadExportedPolicy(kWalkTracker);
+  auto after = ReadExportedPolicy(config.run_dir + "/policy.pt");
+  ASSERT_TRUE(before.ok() && after.ok());
+  auto env = ConnectTo(*server)->Describe();
+  ASSERT_TRUE(env.ok());
+  for (int p = 0; p < env->parts_size(); ++p) {
+    const bool trained = env->parts(p).name() == "R_Arm" || env->parts(p).name() == "L_Arm";
+    EXPECT_EQ(SameTensors(*before, *after, absl::StrCat("part", p, "_controller")), !trained) << env->parts(p).name();
+    for (const char* role : {"key", "query", "value"}) {
+      EXPECT_TRUE(SameTensors(*before, *after, absl::StrCat("part", p, "_", role))) << env->parts(p).name() << " " << role;
+    }
+  }
+  TrainerConfig everything = RetrainArms(*server, "bad");
+  everything.train_parts.clear();
+  everything.train_attention = false;
+  EXPECT_THAT(std::string(Trainer::Create(everything).status().message()), HasSubstr("--train_attention"));
+}
+
 TEST(PartRetrainingTest, BadSettingsAreNamed) {
   auto server = StartTestServer();
   TrainerConfig unknown = RetrainArms(*server, "bad");

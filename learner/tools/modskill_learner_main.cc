@@ -68,6 +68,9 @@ ABSL_FLAG(std::string, init_from, "",
 ABSL_FLAG(std::vector<std::string>, train_parts, {},
           "with --init_from: only these parts' controllers and attention maps train (e.g. R_Arm,L_Arm); the other "
           "parts and the observation statistics stay frozen (default: every part trains)");
+ABSL_FLAG(bool, train_attention, true,
+          "with --train_parts: their attention maps train too; false: their controllers alone, so every part's z "
+          "stays the tracker's");
 ABSL_FLAG(bool, loop_clips, false,
           "tracking: clips loop (on at frame 1, carried by their own displacement) and episodes run 300 steps, so "
           "the skills learn to go on as a task's looping base motion asks");
@@ -314,6 +317,7 @@ absl::Status TaskFromFlags(TrainerConfig* config) {
   config->loop_clips = absl::GetFlag(FLAGS_loop_clips);
   config->init_from = absl::GetFlag(FLAGS_init_from);
   config->train_parts = absl::GetFlag(FLAGS_train_parts);
+  config->train_attention = absl::GetFlag(FLAGS_train_attention);
   if (const std::vector<std::string> hidden = absl::GetFlag(FLAGS_task_hidden); !hidden.empty()) {
     config->model.task_hidden.clear();
     for (const std::string& size : hidden) {

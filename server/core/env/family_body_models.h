@@ -20,7 +20,7 @@
 namespace modskill {
 
 inline constexpr double kBodyScaleResolution = 0.01;  // the scales a model is compiled at
-inline constexpr size_t kMaxCachedBodyModels = 256;   // ~0.2 MB each
+inline constexpr size_t kMaxCachedBodyModels = 2048;  // 67 KB each: 137 MB at most, per session
 
 // The bodies a scale applies to, lengths and radii alike: the legs from the hips down (thighs,
 // shins, feet, toes), the arms from the shoulders out (upper arms, forearms, wrists, hands).
