@@ -18,34 +18,15 @@ namespace {
 
 std::string PartPrefix(size_t part, absl::string_view role) { return absl::StrCat("part", part, "_", role); }
 
-std::string LayerName(absl::string_view prefix, size_t layer, absl::string_view tensor) {
-  return absl::StrCat(prefix, "_fc", layer, "_", tensor);
-}
-
-// Emits `output = mlp(input)` line by line, the same ops as MlpImpl::forward
-// (Linear on a 2-d input is addmm(bias, x, weight^T)).
+// Emits `output = mlp(input)`, the same ops as MlpImpl::forward.
 void EmitMlp(const MlpImpl& mlp, absl::string_view prefix, absl::string_view input, absl::string_view output,
              std::string* source) {
-  const size_t num_layers = mlp.layers().size();
-  std::string x(input);
-  for (size_t i = 0; i < num_layers; ++i) {
-    const bool last = i + 1 == num_layers;
-    const std::string target = last ? std::string(output) : "h";
-    absl::StrAppend(source, "    ", target, " = torch.addmm(self.", LayerName(prefix, i, "bias"), ", ", x, ", self.",
-                    LayerName(prefix, i, "weight"), ".t())\n");
-    if (!last) {
-      absl::StrAppend(source, "    h = torch.", mlp.activation() == Activation::kElu ? "elu" : "relu", "(h)\n");
-    }
-    x = "h";
-  }
+  EmitLinearLayers(mlp.layers().size(), mlp.activation() == Activation::kElu ? "elu" : "relu", prefix, input, output,
+                   source);
 }
 
 void RegisterMlp(const MlpImpl& mlp, absl::string_view prefix, torch::jit::Module* module) {
-  for (size_t i = 0; i < mlp.layers().size(); ++i) {
-    const torch::nn::Linear& layer = mlp.layers()[i];
-    module->register_parameter(LayerName(prefix, i, "weight"), layer->weight.detach().clone(), /*is_buffer=*/false);
-    module->register_parameter(LayerName(prefix, i, "bias"), layer->bias.detach().clone(), /*is_buffer=*/false);
-  }
+  RegisterLinearLayers(mlp.layers(), prefix, module);
 }
 
 std::string Slice(const PartSlices& part) {

@@ -24,11 +24,32 @@ std::vector<torch::nn::Linear> LinearLayers(const torch::nn::Sequential& mlp) {
   return layers;
 }
 
+}  // namespace
+
 std::string LayerName(absl::string_view prefix, size_t layer, absl::string_view tensor) {
   return absl::StrCat(prefix, "_fc", layer, "_", tensor);
 }
 
-}  // namespace
+void RegisterLinearLayers(const std::vector<torch::nn::Linear>& layers, absl::string_view prefix,
+                          torch::jit::Module* module) {
+  for (size_t i = 0; i < layers.size(); ++i) {
+    module->register_parameter(LayerName(prefix, i, "weight"), layers[i]->weight.detach().clone(), /*is_buffer=*/false);
+    module->register_parameter(LayerName(prefix, i, "bias"), layers[i]->bias.detach().clone(), /*is_buffer=*/false);
+  }
+}
+
+void EmitLinearLayers(size_t num_layers, absl::string_view activation, absl::string_view prefix,
+                      absl::string_view input, absl::string_view output, std::string* source) {
+  std::string x(input);
+  for (size_t i = 0; i < num_layers; ++i) {
+    const bool last = i + 1 == num_layers;
+    const std::string target = last ? std::string(output) : "h";
+    absl::StrAppend(source, "    ", target, " = torch.addmm(self.", LayerName(prefix, i, "bias"), ", ", x, ", self.",
+                    LayerName(prefix, i, "weight"), ".t())\n");
+    if (!last) absl::StrAppend(source, "    h = torch.", activation, "(h)\n");
+    x = "h";
+  }
+}
 
 std::string ScriptFloat(double value) {
   std::string text;
@@ -47,25 +68,12 @@ void EmitNormalize(absl::string_view input, absl::string_view stats, std::string
 }
 
 void RegisterLinearStack(const torch::nn::Sequential& mlp, absl::string_view prefix, torch::jit::Module* module) {
-  const std::vector<torch::nn::Linear> layers = LinearLayers(mlp);
-  for (size_t i = 0; i < layers.size(); ++i) {
-    module->register_parameter(LayerName(prefix, i, "weight"), layers[i]->weight.detach().clone(), /*is_buffer=*/false);
-    module->register_parameter(LayerName(prefix, i, "bias"), layers[i]->bias.detach().clone(), /*is_buffer=*/false);
-  }
+  RegisterLinearLayers(LinearLayers(mlp), prefix, module);
 }
 
 void EmitLinearStack(const torch::nn::Sequential& mlp, absl::string_view prefix, absl::string_view input,
                      absl::string_view output, std::string* source) {
-  const size_t num_layers = LinearLayers(mlp).size();
-  std::string x(input);
-  for (size_t i = 0; i < num_layers; ++i) {
-    const bool last = i + 1 == num_layers;
-    const std::string target = last ? std::string(output) : "h";
-    absl::StrAppend(source, "    ", target, " = torch.addmm(self.", LayerName(prefix, i, "bias"), ", ", x, ", self.",
-                    LayerName(prefix, i, "weight"), ".t())\n");
-    if (!last) absl::StrAppend(source, "    h = torch.relu(h)\n");
-    x = "h";
-  }
+  EmitLinearLayers(LinearLayers(mlp).size(), "relu", prefix, input, output, source);
 }
 
 }  // namespace modskill::learner

@@ -17,6 +17,7 @@
 #include "common/wire/tensor_codec.h"
 #include "learner/family/family_trainer.h"
 #include "learner/policy_import.h"
+#include "tests/family_test_config.h"
 #include "tests/server_fixture.h"
 
 namespace modskill::learner::family {
@@ -31,20 +32,7 @@ class FamilyPolicyTest : public ::testing::Test {
     // ctest runs each test of the suite as its own process, side by side: a directory each.
     run_dir_ = new std::string(absl::StrCat(MODSKILL_TEST_TMP_DIR, "/family_policy_", getpid()));
     std::filesystem::remove_all(*run_dir_);
-    FamilyTrainerConfig config;
-    config.client.server = absl::StrCat("127.0.0.1:", server_->port());
-    config.clip = "deepmimic_walk";
-    config.ranges = {{"gravity", 4, 14}};
-    config.run_dir = *run_dir_;
-    config.num_envs = 8;
-    config.horizon = 48;
-    config.epochs = 1;
-    config.minibatches = 2;
-    config.net_every = 1;
-    config.policy_hidden = {32};
-    config.value_hidden = {32};
-    config.curriculum.params_per_batch = 4;
-    config.curriculum.episodes_per_param = 1;
+    FamilyTrainerConfig config = SmallFamilyConfig(server_->port(), *run_dir_);
     config.max_iterations = 2;
     auto trainer = FamilyTrainer::Create(config);
     ASSERT_TRUE(trainer.ok()) << trainer.status();

@@ -9,27 +9,14 @@
 
 #include "absl/strings/str_cat.h"
 #include "learner/family/family_trainer.h"
+#include "tests/family_test_config.h"
 #include "tests/server_fixture.h"
 
 namespace modskill::learner::family {
 namespace {
 
 FamilyTrainerConfig SmallFamily(const RunningServer& server, const std::string& run_dir) {
-  FamilyTrainerConfig config;
-  config.client.server = absl::StrCat("127.0.0.1:", server.port());
-  config.clip = "deepmimic_walk";
-  config.ranges = {{"gravity", 4, 14}};
-  config.run_dir = run_dir;
-  config.num_envs = 8;
-  config.horizon = 48;
-  config.epochs = 1;
-  config.minibatches = 2;
-  config.net_every = 1;
-  config.policy_hidden = {32};
-  config.value_hidden = {32};
-  config.curriculum.params_per_batch = 4;
-  config.curriculum.episodes_per_param = 1;
-  return config;
+  return SmallFamilyConfig(server.port(), run_dir);
 }
 
 int CountLines(const std::string& path) {

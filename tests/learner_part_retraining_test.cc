@@ -3,6 +3,8 @@
 // and the observation statistics come out of training bit for bit as they went in, the arms'
 // do not; bad --init_from and --train_parts are named.
 #include <filesystem>
+#include <functional>
+#include <initializer_list>
 #include <string>
 
 #include <gmock/gmock.h>
@@ -41,6 +43,20 @@ bool SameTensors(const ExportedPolicy& a, const ExportedPolicy& b, const std::st
   return compared > 0;
 }
 
+bool IsArm(const std::string& part) { return part == "R_Arm" || part == "L_Arm"; }
+
+// For each part of `env` and each of `roles`: the tensors are the tracker's exactly when
+// `unchanged(part)` says so.
+void ExpectUnchanged(const ExportedPolicy& before, const ExportedPolicy& after, const v1::EnvSpec& env,
+                     std::initializer_list<const char*> roles, const std::function<bool(const std::string&)>& unchanged) {
+  for (int p = 0; p < env.parts_size(); ++p) {
+    for (const char* role : roles) {
+      EXPECT_EQ(SameTensors(before, after, absl::StrCat("part", p, "_", role)), unchanged(env.parts(p).name()))
+          << env.parts(p).name() << " " << role;
+    }
+  }
+}
+
 TEST(PartRetrainingTest, OnlyTheNamedPartsTrain) {
   auto server = StartTestServer();
   TrainerConfig config = RetrainArms(*server, "arms");
@@ -53,13 +69,8 @@ TEST(PartRetrainingTest, OnlyTheNamedPartsTrain) {
   // 5part: L_Leg, R_Leg, Torso, L_Arm, R_Arm (the server's order).
   auto env = ConnectTo(*server)->Describe();
   ASSERT_TRUE(env.ok());
-  for (int p = 0; p < env->parts_size(); ++p) {
-    const bool trained = env->parts(p).name() == "R_Arm" || env->parts(p).name() == "L_Arm";
-    for (const char* role : {"controller", "key", "query", "value"}) {
-      const std::string prefix = absl::StrCat("part", p, "_", role);
-      EXPECT_EQ(SameTensors(*before, *after, prefix), !trained) << env->parts(p).name() << " " << prefix;
-    }
-  }
+  ExpectUnchanged(*before, *after, *env, {"controller", "key", "query", "value"},
+                  [](const std::string& part) { return !IsArm(part); });
   EXPECT_TRUE(torch::equal(before->tensors.at("obs_mean"), after->tensors.at("obs_mean")));
   EXPECT_TRUE(torch::equal(before->tensors.at("obs_var"), after->tensors.at("obs_var")));
 
@@ -95,13 +106,8 @@ TEST(PartRetrainingTest, ControllersAloneKeepEveryAttentionMap) {
   ASSERT_TRUE(before.ok() && after.ok());
   auto env = ConnectTo(*server)->Describe();
   ASSERT_TRUE(env.ok());
-  for (int p = 0; p < env->parts_size(); ++p) {
-    const bool trained = env->parts(p).name() == "R_Arm" || env->parts(p).name() == "L_Arm";
-    EXPECT_EQ(SameTensors(*before, *after, absl::StrCat("part", p, "_controller")), !trained) << env->parts(p).name();
-    for (const char* role : {"key", "query", "value"}) {
-      EXPECT_TRUE(SameTensors(*before, *after, absl::StrCat("part", p, "_", role))) << env->parts(p).name() << " " << role;
-    }
-  }
+  ExpectUnchanged(*before, *after, *env, {"controller"}, [](const std::string& part) { return !IsArm(part); });
+  ExpectUnchanged(*before, *after, *env, {"key", "query", "value"}, [](const std::string&) { return true; });
   TrainerConfig everything = RetrainArms(*server, "bad");
   everything.train_parts.clear();
   everything.train_attention = false;

@@ -2,12 +2,12 @@
 
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <map>
 
 #include <nlohmann/json.hpp>
 
 #include "absl/strings/str_cat.h"
+#include "client/cpp/checkpoint_source.h"
 #include "client/cpp/cli_output.h"
 #include "common/atomic_file.h"
 #include "common/wire/tensor_codec.h"
@@ -27,15 +27,8 @@ std::string ParamsText(const google::protobuf::Map<std::string, double>& params)
 
 absl::StatusOr<v1::QueryFamilyRequest> MakeRequest(const FamilyQueryOptions& options) {
   v1::QueryFamilyRequest request;
-  if (options.upload) {
-    auto bytes = ReadFileToString(options.checkpoint, size_t{512} << 20);
-    if (!bytes.ok()) return absl::Status(bytes.status().code(), absl::StrCat("--checkpoint: ", bytes.status().message()));
-    request.set_checkpoint_bytes(*std::move(bytes));
-  } else {
-    std::error_code error;
-    const std::filesystem::path path = std::filesystem::absolute(options.checkpoint, error);
-    request.set_checkpoint_path(error ? options.checkpoint : path.lexically_normal().string());
-  }
+  std::string shown;
+  if (absl::Status status = SetCheckpoint(options.checkpoint, options.upload, &request, &shown); !status.ok()) return status;
   for (const auto& [name, value] : options.params) (*request.mutable_params())[name] = value;
   request.set_nearest_elites(options.nearest_elites);
   return request;

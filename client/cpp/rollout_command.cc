@@ -18,6 +18,7 @@
 #include "absl/status/statusor.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "client/cpp/checkpoint_source.h"
 #include "client/cpp/cli_output.h"
 #include "common/atomic_file.h"
 #include "common/viewer/viewer_wire.h"
@@ -82,16 +83,8 @@ absl::Status CheckOutDirectory(const std::string& out, const char* flag) {
 // `checkpoint_shown`: how the checkpoint is named in the output.
 absl::StatusOr<v1::RolloutRequest> MakeRequest(const RolloutOptions& options, std::string* checkpoint_shown) {
   v1::RolloutRequest request;
-  *checkpoint_shown = options.checkpoint;
-  if (options.upload) {
-    auto bytes = ReadFileToString(options.checkpoint, size_t{512} << 20);
-    if (!bytes.ok()) return absl::Status(bytes.status().code(), absl::StrCat("--checkpoint: ", bytes.status().message()));
-    request.set_checkpoint_bytes(*std::move(bytes));
-  } else {
-    std::error_code error;
-    std::filesystem::path path = std::filesystem::absolute(options.checkpoint, error);
-    *checkpoint_shown = error ? options.checkpoint : path.lexically_normal().string();
-    request.set_checkpoint_path(*checkpoint_shown);
+  if (absl::Status status = SetCheckpoint(options.checkpoint, options.upload, &request, checkpoint_shown); !status.ok()) {
+    return status;
   }
   for (const std::string& clip : options.clips) request.add_clips(clip);
   request.set_stream_frames(options.frames || !options.html.empty());

@@ -82,6 +82,22 @@ def _stack_poses(clip: str, rows: Sequence[pb.RolloutFrame], name: str, width: i
     return np.stack(poses) if poses else np.zeros((0, num_bodies, width), np.float32)
 
 
+def _set_checkpoint(request, rpc: str, checkpoint: Optional[PathLike], checkpoint_bytes: Optional[bytes],
+                    server_checkpoint: Optional[str]) -> None:
+    """Sets the checkpoint oneof of a Rollout or QueryFamily request from exactly one source: a
+    local file (its bytes are uploaded), the archive's bytes, or a path the server reads."""
+    given = [x is not None for x in (checkpoint, checkpoint_bytes, server_checkpoint)]
+    if sum(given) != 1:
+        raise ValueError(f"{rpc}: pass exactly one of checkpoint, checkpoint_bytes, server_checkpoint")
+    if checkpoint is not None:
+        with open(checkpoint, "rb") as f:
+            request.checkpoint_bytes = f.read()
+    elif checkpoint_bytes is not None:
+        request.checkpoint_bytes = bytes(checkpoint_bytes)
+    else:
+        request.checkpoint_path = server_checkpoint
+
+
 def _set_frames(result: ClipRollout, rows: Sequence[pb.RolloutFrame]) -> None:
     """Fills the per-row fields of ``result`` from its clip's streamed frames."""
     shape = rows[0].sim_body_pos.shape if rows else []
@@ -284,9 +300,6 @@ class Client:
             trained range. ``ClipRollout.family`` then says what a did (F, apex, flight). A value
             outside the trained range is a ServerError INVALID_ARGUMENT naming it.
         """
-        given = [x is not None for x in (checkpoint, checkpoint_bytes, server_checkpoint)]
-        if sum(given) != 1:
-            raise ValueError("rollout: pass exactly one of checkpoint, checkpoint_bytes, server_checkpoint")
         if isinstance(clips, str):
             clips = [clips]
         frames = bool(frames or record_skills)
@@ -300,13 +313,7 @@ class Client:
             request.family_params[str(name)] = float(value)
         if action_mode is not None:
             request.action_mode = _enum(action_mode, _ACTION_MODE, "action_mode")
-        if checkpoint is not None:
-            with open(checkpoint, "rb") as f:
-                request.checkpoint_bytes = f.read()
-        elif checkpoint_bytes is not None:
-            request.checkpoint_bytes = bytes(checkpoint_bytes)
-        else:
-            request.checkpoint_path = server_checkpoint
+        _set_checkpoint(request, "rollout", checkpoint, checkpoint_bytes, server_checkpoint)
         results: List[ClipRollout] = []
         frame_rows: Dict[str, List[pb.RolloutFrame]] = {}
         try:
@@ -332,19 +339,10 @@ class Client:
         elites nearest a (0: 5, the paper's k). Give exactly one of checkpoint (a local file,
         uploaded), checkpoint_bytes or server_checkpoint (as ``rollout``). ServerError
         FAILED_PRECONDITION for a checkpoint that is not a family's."""
-        given = [x is not None for x in (checkpoint, checkpoint_bytes, server_checkpoint)]
-        if sum(given) != 1:
-            raise ValueError("query_family: pass exactly one of checkpoint, checkpoint_bytes, server_checkpoint")
         request = pb.QueryFamilyRequest(nearest_elites=int(nearest_elites))
         for name, value in (params or {}).items():
             request.params[str(name)] = float(value)
-        if checkpoint is not None:
-            with open(checkpoint, "rb") as f:
-                request.checkpoint_bytes = f.read()
-        elif checkpoint_bytes is not None:
-            request.checkpoint_bytes = bytes(checkpoint_bytes)
-        else:
-            request.checkpoint_path = server_checkpoint
+        _set_checkpoint(request, "query_family", checkpoint, checkpoint_bytes, server_checkpoint)
         return FamilyQuery.from_proto(self._unary("QueryFamily", request, timeout))
 
     def record_skills(self, checkpoint: PathLike, clips: Sequence[str] = (), max_steps_per_clip: int = 0,
