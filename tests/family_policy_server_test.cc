@@ -36,11 +36,7 @@ class FamilyPolicyTest : public ::testing::Test {
     config.max_iterations = 2;
     auto trainer = FamilyTrainer::Create(config);
     ASSERT_TRUE(trainer.ok()) << trainer.status();
-    {
-      // Hurry through the clip (tau 0.25) so that episodes reach its end and become elites.
-      torch::NoGradGuard no_grad;
-      (*trainer)->model()->named_parameters()["policy.2.bias"][69] = 0.25;
-    }
+    HurryThroughTheClip(**trainer);
     ASSERT_TRUE((*trainer)->Run([] { return false; }).ok());
     trainer_ = trainer->release();
   }
