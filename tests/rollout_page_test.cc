@@ -16,6 +16,7 @@
 
 #include "absl/strings/escaping.h"
 #include "common/atomic_file.h"
+#include "common/policy/family_parameters.h"
 #include "common/policy/policy_checkpoint.h"
 #include "common/viewer/viewer_html.h"
 #include "common/viewer/viewer_wire.h"
@@ -167,6 +168,53 @@ TEST_F(RolloutPageTest, PageFramesEqualTheStreamedFrames) {
   // Both clips ran from their first frame.
   EXPECT_EQ(streamed["deepmimic_walk"].front().frame(), 0);
   EXPECT_EQ(streamed["deepmimic_run"].front().frame(), 0);
+}
+
+// A family at other body proportions (a zero affine family policy over leg_scale, run at 1.2): the
+// page draws the legs stretched as the server stretched them, every other body as described.
+TEST_F(RolloutPageTest, FamilyLimbsAreDrawnAtTheirScale) {
+  auto spec = client_->Describe();
+  auto motions = client_->ListMotions();
+  ASSERT_TRUE(spec.ok() && motions.ok());
+  PolicySpec family;
+  family.part_layout = spec->part_layout();
+  family.obs_size = spec->obs_size() + 2;  // a normalized, then the phase
+  family.action_size = spec->action_size() + 1;  // the time warp
+  family.joint_names.assign(spec->joint_names().begin(), spec->joint_names().end());
+  family.control_dt = spec->control_dt();
+  family.action.mode = ActionMode::kResidual;
+  family.family_clip = "deepmimic_walk";
+  family.family_frames = motions->motions(0).frames();
+  for (const v1::MotionInfo& info : motions->motions()) {
+    if (info.name() == "deepmimic_walk") family.family_frames = info.frames();
+  }
+  family.family = {{"leg_scale", 0.8, 1.2}};
+  auto bytes = AffinePolicyBytes(family, {}, {});
+  ASSERT_TRUE(bytes.ok()) << bytes.status();
+  auto page = PrepareRolloutPage(*spec, *motions);
+  ASSERT_TRUE(page.ok()) << page.status();
+  v1::RolloutRequest request;
+  request.set_checkpoint_bytes(*bytes);
+  request.set_stream_frames(true);
+  (*request.mutable_family_params())["leg_scale"] = 1.2;
+  auto metrics = client_->Rollout(request, [&](const v1::RolloutFrame& frame) { page->Add(frame); });
+  ASSERT_TRUE(metrics.ok()) << metrics.status();
+  ASSERT_EQ(metrics->size(), 1u);
+  EXPECT_EQ(metrics->front().family().params().at("leg_scale"), 1.2);
+  page->ScaleFamilyLimbs(1.2, 1.0);
+  auto scene = page->TakeScene("family");
+  ASSERT_TRUE(scene.ok()) << scene.status();
+  auto described = ViewerBodiesFromWire(*spec);
+  ASSERT_TRUE(described.ok());
+  for (size_t b = 0; b < scene->bodies.size(); ++b) {
+    const ViewerBody& drawn = scene->bodies[b];
+    const double expected = FamilyLimbScale(drawn.name, 1.2, 1.0);
+    EXPECT_NEAR(drawn.geom.radius, expected * (*described)[b].geom.radius, 1e-12) << drawn.name;
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(drawn.geom.to[k], expected * (*described)[b].geom.to[k], 1e-12) << drawn.name;
+  }
+  EXPECT_EQ(FamilyLimbScale("L_Knee", 1.2, 1.0), 1.2);
+  EXPECT_EQ(FamilyLimbScale("R_Elbow", 1.2, 0.9), 0.9);
+  EXPECT_EQ(FamilyLimbScale("Torso", 1.2, 0.9), 1.0);
 }
 
 TEST_F(RolloutPageTest, MalformedGeometryAndFramesAreErrorsNamingTheField) {

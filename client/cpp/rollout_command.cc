@@ -330,6 +330,12 @@ int Rollout(SimulationClient& client, const RolloutOptions& options) {
   if (!metrics.ok()) return Fail(metrics.status());
   if (!frames.error().ok()) return Fail(frames.error());
   if (page) {
+    // A family at other body proportions: its limbs as the server stretched them.
+    if (metrics->size() == 1 && metrics->front().has_family()) {
+      const auto& params = metrics->front().family().params();
+      page->ScaleFamilyLimbs(params.count("leg_scale") ? params.at("leg_scale") : 1.0,
+                             params.count("arm_scale") ? params.at("arm_scale") : 1.0);
+    }
     if (int code = WritePage(*page, absl::StrCat("rollout of ", checkpoint_shown), options.html); code != 0) return code;
   }
 

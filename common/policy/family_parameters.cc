@@ -153,4 +153,14 @@ absl::StatusOr<std::vector<double>> ParamSpace::Denormalize(absl::Span<const dou
   return a;
 }
 
+double FamilyLimbScale(absl::string_view body, double leg_scale, double arm_scale) {
+  for (const char* leg : {"Hip", "Knee", "Ankle", "Toe"}) {
+    if (absl::StrContains(body, leg)) return leg_scale;
+  }
+  for (const char* arm : {"Shoulder", "Elbow", "Wrist", "Hand"}) {
+    if (absl::StrContains(body, arm)) return arm_scale;
+  }
+  return 1.0;
+}
+
 }  // namespace modskill

@@ -47,6 +47,12 @@ absl::StatusOr<std::vector<ParamRange>> ParseParamRanges(absl::Span<const std::s
 // The same checks for a range built in code (or decoded from the wire).
 absl::Status ValidateParamRange(const ParamRange& range);
 
+// How much `leg_scale` and `arm_scale` stretch one body (lengths and radii alike): the legs from
+// the hips down (thighs, shins, feet, toes) take leg_scale, the arms from the shoulders out
+// (upper arms, forearms, wrists, hands) arm_scale, every other body 1. The server scales its
+// model by it (server/core/env/family_body_models.h), the viewer the limbs it draws.
+double FamilyLimbScale(absl::string_view body, double leg_scale, double arm_scale);
+
 // A run's parameter space: its ranges, and the map to the unit cube the elite set, the
 // parameterization network and the curriculum measure distances in. Every dimension is
 // normalized to [0, 1] over its range so that gravity (m/s^2) and a scale weigh alike in

@@ -7,6 +7,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "common/policy/family_parameters.h"
 #include "common/shown_value.h"
 #include "common/viewer/viewer_html.h"
 #include "common/wire/tensor_codec.h"
@@ -181,6 +182,20 @@ absl::StatusOr<RolloutViewerRecorder> PrepareRolloutPage(const v1::EnvSpec& spec
   for (const v1::MotionInfo& motion : motions.motions()) labels[motion.name()] = motion.label();
   recorder->set_labels(std::move(labels));
   return recorder;
+}
+
+void RolloutViewerRecorder::ScaleFamilyLimbs(double leg_scale, double arm_scale) {
+  for (ViewerBody& body : bodies_) {
+    const double scale = FamilyLimbScale(body.name, leg_scale, arm_scale);
+    ViewerGeom& g = body.geom;
+    g.radius *= scale;
+    for (int k = 0; k < 3; ++k) {
+      g.half_extents[k] *= scale;
+      g.from[k] *= scale;
+      g.to[k] *= scale;
+      g.center[k] *= scale;
+    }
+  }
 }
 
 }  // namespace modskill

@@ -32,6 +32,11 @@ class RolloutViewerRecorder {
   // that a server without geometry fails before the rollout runs.
   static absl::StatusOr<RolloutViewerRecorder> ForSpec(const v1::EnvSpec& spec);
 
+  // A motor-skill family's rollout at other body proportions (ClipMetrics.family.params'
+  // leg_scale and arm_scale): the limbs are drawn stretched as the server stretched them
+  // (FamilyLimbScale), not at the session's default geometry.
+  void ScaleFamilyLimbs(double leg_scale, double arm_scale);
+
   // Captions by clip name (ListMotions' labels), shown under the clip's name.
   void set_labels(std::map<std::string, std::string> labels) { labels_ = std::move(labels); }
 

@@ -257,8 +257,9 @@ grpc::Status SimulationService::Rollout(grpc::ServerContext* context, const v1::
   int successes = 0;
   for (v1::ClipMetrics& clip : *metrics) {
     if (trained.is_family()) {
-      const std::vector<double> a(options->family_params.begin(), options->family_params.end());
-      SetFamilyParams(trained.family, a, clip.mutable_family()->mutable_params());
+      // The request's values as given (the envs ran them as float32).
+      auto a = ResolveFamilyParams(trained.family, request->family_params(), "family_params");
+      if (a.ok()) SetFamilyParams(trained.family, *a, clip.mutable_family()->mutable_params());
     }
     v1::RolloutResponse message;
     *message.mutable_metrics() = clip;

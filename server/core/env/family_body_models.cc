@@ -2,21 +2,11 @@
 
 #include <cmath>
 
-#include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
+#include "common/policy/family_parameters.h"
 
 namespace modskill {
 namespace {
-
-constexpr const char* kLegBodies[] = {"Hip", "Knee", "Ankle", "Toe"};
-constexpr const char* kArmBodies[] = {"Shoulder", "Elbow", "Wrist", "Hand"};
-
-bool NameHasAny(const std::string& name, const char* const (&parts)[4]) {
-  for (const char* part : parts) {
-    if (absl::StrContains(name, part)) return true;
-  }
-  return false;
-}
 
 int Quantize(double scale) { return static_cast<int>(std::lround(scale / kBodyScaleResolution)); }
 
@@ -25,7 +15,7 @@ int Quantize(double scale) { return static_cast<int>(std::lround(scale / kBodySc
 BodyScaling FamilyBodyScaling(const HumanoidSpec& spec, double leg_scale, double arm_scale) {
   BodyScaling scaling;
   for (const BodySpec& body : spec.bodies()) {
-    const double scale = NameHasAny(body.name, kLegBodies) ? leg_scale : NameHasAny(body.name, kArmBodies) ? arm_scale : 1.0;
+    const double scale = FamilyLimbScale(body.name, leg_scale, arm_scale);
     if (scale == 1.0) continue;
     scaling.length_by_body[body.name] = scale;
     scaling.radius_by_body[body.name] = scale;

@@ -22,8 +22,7 @@ namespace modskill {
 inline constexpr double kBodyScaleResolution = 0.01;  // the scales a model is compiled at
 inline constexpr size_t kMaxCachedBodyModels = 2048;  // 67 KB each: 137 MB at most, per session
 
-// The bodies a scale applies to, lengths and radii alike: the legs from the hips down (thighs,
-// shins, feet, toes), the arms from the shoulders out (upper arms, forearms, wrists, hands).
+// The bodies a scale applies to, lengths and radii alike (FamilyLimbScale).
 BodyScaling FamilyBodyScaling(const HumanoidSpec& spec, double leg_scale, double arm_scale);
 
 // The clip on a scaled skeleton: the same joint rotations, the root's travel from its first frame
