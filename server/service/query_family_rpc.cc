@@ -17,24 +17,22 @@ namespace {
 constexpr int kDefaultNearestElites = 5;  // the paper's k
 constexpr int kMaxNearestElites = 64;
 
-// a over each range in [0, 1]; 0 for a constraint (ParamSpace::Normalize).
-std::vector<double> Normalized(const std::vector<ParamRange>& ranges, const std::vector<double>& a) {
-  std::vector<double> u;
-  for (size_t k = 0; k < ranges.size(); ++k) {
-    const double width = ranges[k].hi - ranges[k].lo;
-    u.push_back(width > 0 ? (a[k] - ranges[k].lo) / width : 0.0);
-  }
-  return u;
-}
-
-// The k elites nearest u, nearest first, with their distances in the normalized space.
-void AddNearestElites(const std::vector<ParamRange>& ranges, const std::vector<FamilyEliteRecord>& elites,
+// The k elites nearest u, nearest first, with their distances in the normalized space. An elite is
+// clamped into the ranges first: its a was denormalized from [0, 1] and may overshoot a bound by
+// a rounding error.
+void AddNearestElites(const ParamSpace& space, const std::vector<FamilyEliteRecord>& elites,
                       const std::vector<double>& u, int k, v1::QueryFamilyResponse* out) {
   std::vector<std::pair<double, size_t>> by_distance;
+  std::vector<double> inside;
   for (size_t e = 0; e < elites.size(); ++e) {
-    const std::vector<double> v = Normalized(ranges, elites[e].params);
+    inside = elites[e].params;
+    for (size_t d = 0; d < inside.size() && d < space.ranges().size(); ++d) {
+      inside[d] = std::clamp(inside[d], space.ranges()[d].lo, space.ranges()[d].hi);
+    }
+    const absl::StatusOr<std::vector<double>> v = space.Normalize(inside);
+    if (!v.ok()) continue;  // another number of parameters: FamilyElitesFromJson refuses those
     double squared = 0;
-    for (size_t d = 0; d < v.size(); ++d) squared += (v[d] - u[d]) * (v[d] - u[d]);
+    for (size_t d = 0; d < v->size(); ++d) squared += ((*v)[d] - u[d]) * ((*v)[d] - u[d]);
     by_distance.emplace_back(std::sqrt(squared), e);
   }
   const size_t count = std::min(by_distance.size(), static_cast<size_t>(k));
@@ -42,7 +40,7 @@ void AddNearestElites(const std::vector<ParamRange>& ranges, const std::vector<F
   for (size_t i = 0; i < count; ++i) {
     const FamilyEliteRecord& elite = elites[by_distance[i].second];
     v1::FamilyElite* wire = out->add_nearest_elites();
-    SetFamilyParams(ranges, elite.params, wire->mutable_params());
+    SetFamilyParams(space.ranges(), elite.params, wire->mutable_params());
     wire->set_fitness(elite.fitness);
     wire->set_distance(by_distance[i].first);
   }
@@ -68,7 +66,10 @@ grpc::Status SimulationService::QueryFamily(grpc::ServerContext* context, const 
   }
   auto a = ResolveFamilyParams(spec.family, request->params(), "params");
   if (!a.ok()) return ToGrpcStatus(a.status());
-  const std::vector<double> u = Normalized(spec.family, *a);
+  auto space = ParamSpace::Create(spec.family);  // the spec's ranges are checked (PolicySpec::FromJson)
+  if (!space.ok()) return ToGrpcStatus(space.status());
+  auto u = space->Normalize(*a);
+  if (!u.ok()) return ToGrpcStatus(u.status());
   response->set_clip(spec.family_clip);
   for (const ParamRange& range : spec.family) {
     v1::FamilyParameterRange* wire = response->add_ranges();
@@ -77,16 +78,16 @@ grpc::Status SimulationService::QueryFamily(grpc::ServerContext* context, const 
     wire->set_hi(range.hi);
   }
   SetFamilyParams(spec.family, *a, response->mutable_params());
-  for (double value : u) response->add_normalized_params(value);
+  for (double value : *u) response->add_normalized_params(value);
   if ((*policy)->has_parameterization()) {
-    auto trajectory = (*policy)->Parameterization(u);
+    auto trajectory = (*policy)->Parameterization(*u);
     if (!trajectory.ok()) return ToGrpcStatus(trajectory.status());
     SetFloatTensor({spec.family_frames, spec.action_size}, trajectory->data(), response->mutable_parameterization());
     for (const std::string& joint : spec.joint_names) response->add_parameterization_columns(joint);
     response->add_parameterization_columns("tau");
   }
   response->set_elites(static_cast<int>((*policy)->family_elites().size()));
-  AddNearestElites(spec.family, (*policy)->family_elites(), u, nearest, response);
+  AddNearestElites(*space, (*policy)->family_elites(), *u, nearest, response);
   return grpc::Status::OK;
 }
 

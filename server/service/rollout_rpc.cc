@@ -70,10 +70,11 @@ absl::StatusOr<std::vector<int>> RolloutClipIds(const v1::RolloutRequest& reques
   return clip_ids;
 }
 
-// A motor-skill family's policy runs its one clip, as a family env at the request's a; without
-// an asked-for termination it ends as in training (a fall, or a body 1 m off the warped clip).
+// A motor-skill family's policy runs its one clip, as a family env at the request's a (`a`, as
+// given; the envs run it as float32); without an asked-for termination it ends as in training (a
+// fall, or a body 1 m off the warped clip).
 absl::Status UseFamily(const v1::RolloutRequest& request, const PolicySpec& trained,
-                       std::shared_ptr<const MotionLibrary>* motions, RolloutOptions* options) {
+                       std::shared_ptr<const MotionLibrary>* motions, RolloutOptions* options, std::vector<double>* a) {
   if (!trained.is_family()) {
     if (request.family_params().empty()) return absl::OkStatus();
     return absl::FailedPreconditionError(
@@ -98,8 +99,9 @@ absl::Status UseFamily(const v1::RolloutRequest& request, const PolicySpec& trai
                                                       "' had ", trained.family_frames, " frames; this server's has ",
                                                       clip->clip(0).num_frames));
   }
-  auto a = ResolveFamilyParams(trained.family, request.family_params(), "family_params");
-  if (!a.ok()) return a.status();
+  auto resolved = ResolveFamilyParams(trained.family, request.family_params(), "family_params");
+  if (!resolved.ok()) return resolved.status();
+  *a = *std::move(resolved);
   *motions = std::make_shared<const MotionLibrary>(*std::move(clip));
   options->family = trained.family;
   options->family_params.assign(a->begin(), a->end());
@@ -237,7 +239,10 @@ grpc::Status SimulationService::Rollout(grpc::ServerContext* context, const v1::
   options->task = *task;
   if (absl::Status status = CheckSkillRequest(*request, **policy, *task); !status.ok()) return ToGrpcStatus(status);
   std::shared_ptr<const MotionLibrary> motions = motions_.Snapshot();
-  if (absl::Status status = UseFamily(*request, trained, &motions, &*options); !status.ok()) return ToGrpcStatus(status);
+  std::vector<double> family_a;
+  if (absl::Status status = UseFamily(*request, trained, &motions, &*options, &family_a); !status.ok()) {
+    return ToGrpcStatus(status);
+  }
   absl::StatusOr<std::vector<int>> clip_ids = RolloutClipIds(*request, *motions);
   if (!clip_ids.ok()) return ToGrpcStatus(clip_ids.status());
   if (request->has_composition()) clip_ids = std::vector<int>{motions->Find(request->composition().base_clip())};
@@ -256,11 +261,7 @@ grpc::Status SimulationService::Rollout(grpc::ServerContext* context, const v1::
   if (!metrics.ok()) return ToGrpcStatus(metrics.status());
   int successes = 0;
   for (v1::ClipMetrics& clip : *metrics) {
-    if (trained.is_family()) {
-      // The request's values as given (the envs ran them as float32).
-      auto a = ResolveFamilyParams(trained.family, request->family_params(), "family_params");
-      if (a.ok()) SetFamilyParams(trained.family, *a, clip.mutable_family()->mutable_params());
-    }
+    if (trained.is_family()) SetFamilyParams(trained.family, family_a, clip.mutable_family()->mutable_params());
     v1::RolloutResponse message;
     *message.mutable_metrics() = clip;
     successes += clip.success();

@@ -52,7 +52,6 @@ absl::StatusOr<std::shared_ptr<const HumanoidModel>> FamilyBodyModels::Get(doubl
     return absl::InternalError(absl::StrCat("family body scale ", leg_scale, "/", arm_scale,
                                             ": the scaled model's layout differs from the session's"));
   }
-  ++compiled_;
   cache_[key] = *model;
   order_.push_back(key);
   if (order_.size() > kMaxCachedBodyModels) {

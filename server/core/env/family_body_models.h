@@ -37,14 +37,12 @@ class FamilyBodyModels {
   // pair compiles once (milliseconds) while it stays among the kMaxCachedBodyModels latest.
   // INTERNAL when its model's layout differs from the base model's (it could not be copied in).
   absl::StatusOr<std::shared_ptr<const HumanoidModel>> Get(double leg_scale, double arm_scale);
-  int64_t compiled() const { return compiled_; }
 
  private:
   std::shared_ptr<const HumanoidModel> base_;
   std::mutex mutex_;
   std::map<std::pair<int, int>, std::shared_ptr<const HumanoidModel>> cache_;
   std::deque<std::pair<int, int>> order_;  // oldest first
-  int64_t compiled_ = 0;
 };
 
 }  // namespace modskill
