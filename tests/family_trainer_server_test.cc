@@ -1,6 +1,6 @@
 // The family trainer end to end against an in-process server: iterations run, episodes reach the
 // elite set with the server's fitness, progress.csv and the checkpoint are written, a resumed run
-// continues the counters and refuses another family; bad flags name themselves.
+// continues the counters and the KL-steered learning rate and refuses another family; bad flags name themselves.
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -33,6 +33,7 @@ TEST(FamilyTrainerTest, TrainsWritesAndResumes) {
   std::filesystem::remove_all(run_dir);
   FamilyTrainerConfig config = SmallFamily(*server, run_dir);
   config.max_iterations = 2;
+  double rate_at_stop = 0;
   {
     auto trainer = FamilyTrainer::Create(config);
     ASSERT_TRUE(trainer.ok()) << trainer.status();
@@ -46,6 +47,10 @@ TEST(FamilyTrainerTest, TrainsWritesAndResumes) {
       EXPECT_GT(elite.fitness, 0.0);
       EXPECT_EQ(elite.trajectory.size(1), 70);  // 69 displacements and tau
     }
+    // The KL of a fresh policy's steps is far from the target: the rate moved, within its bounds.
+    rate_at_stop = (*trainer)->learning_rate();
+    EXPECT_NE(rate_at_stop, config.learning_rate);
+    EXPECT_GE(rate_at_stop, KlAdaptiveLearningRate::kMinRate);
   }
   EXPECT_EQ(CountLines(run_dir + "/progress.csv"), 1 + 2);
   EXPECT_TRUE(std::filesystem::exists(run_dir + "/checkpoint.pt"));
@@ -56,6 +61,7 @@ TEST(FamilyTrainerTest, TrainsWritesAndResumes) {
   auto resumed = FamilyTrainer::Create(config);
   ASSERT_TRUE(resumed.ok()) << resumed.status();
   EXPECT_EQ((*resumed)->env_steps(), 2 * 8 * 48);
+  EXPECT_DOUBLE_EQ((*resumed)->learning_rate(), rate_at_stop) << "the steered rate is part of the checkpoint";
   auto evaluated = (*resumed)->Evaluate({{4.0}, {14.0}});
   ASSERT_TRUE(evaluated.ok()) << evaluated.status();
   ASSERT_EQ(evaluated->size(), 2u);
@@ -78,6 +84,26 @@ TEST(FamilyTrainerTest, TrainsWritesAndResumes) {
   EXPECT_NE(refused.status().message().find("gravity=4:14"), std::string::npos) << refused.status();
 }
 
+TEST(FamilyTrainerTest, PpoRatiosCompareTheInputsTheBehaviourPolicySaw) {
+  // With a vanishing learning rate the policy does not move, so each update's KL must be ~0. It was
+  // 0.02 and more when the observation statistics absorbed the batch before the epochs: the same
+  // weights then saw differently normalized inputs than when they acted.
+  auto server = StartTestServer();
+  ASSERT_NE(server, nullptr);
+  const std::string run_dir = std::string(MODSKILL_TEST_TMP_DIR) + "/family_still";
+  std::filesystem::remove_all(run_dir);
+  FamilyTrainerConfig config = SmallFamily(*server, run_dir);
+  config.learning_rate = 1e-9;
+  config.target_kl = 0;
+  auto trainer = FamilyTrainer::Create(config);
+  ASSERT_TRUE(trainer.ok()) << trainer.status();
+  for (int i = 0; i < 3; ++i) {
+    auto stats = (*trainer)->Iterate();
+    ASSERT_TRUE(stats.ok()) << stats.status();
+    EXPECT_LT(stats->approx_kl, 1e-5) << "iteration " << i;
+  }
+}
+
 TEST(FamilyTrainerTest, BadSettingsAreNamed) {
   auto server = StartTestServer();
   ASSERT_NE(server, nullptr);
@@ -92,6 +118,9 @@ TEST(FamilyTrainerTest, BadSettingsAreNamed) {
   config = SmallFamily(*server, std::string(MODSKILL_TEST_TMP_DIR) + "/family_bad");
   config.horizon = 1;
   EXPECT_NE(FamilyTrainer::Create(config).status().message().find("--horizon"), std::string::npos);
+  config = SmallFamily(*server, std::string(MODSKILL_TEST_TMP_DIR) + "/family_bad");
+  config.target_kl = -0.1;
+  EXPECT_NE(FamilyTrainer::Create(config).status().message().find("--family_target_kl"), std::string::npos);
 }
 
 }  // namespace

@@ -19,6 +19,7 @@
 #include "absl/strings/string_view.h"
 #include "learner/amp_loss.h"
 #include "learner/gae.h"
+#include "learner/kl_adaptive_learning_rate.h"
 #include "learner/ppo_loss.h"
 #include "learner/tensorboard_writer.h"
 #include "learner/termination_curriculum.h"
@@ -203,6 +204,37 @@ TEST(PpoLossTest, DecoupledAdvantagesWeighTowardTheProximalPolicy) {
 
 // ------------------------------------------------------------------------------------------
 // AMP
+
+TEST(KlAdaptiveLearningRateTest, StepsDownOnLargeKlUpOnSmallAndStaysInBounds) {
+  KlAdaptiveLearningRate rate(3e-4, 0.01);
+  EXPECT_NEAR(rate.Update(0.05), 2e-4, 1e-12);      // above 2 x target: / 1.5
+  EXPECT_NEAR(rate.Update(0.015), 2e-4, 1e-12);     // within [target / 2, 2 x target]: kept
+  EXPECT_NEAR(rate.Update(0.001), 3e-4, 1e-12);     // below target / 2: x 1.5
+  for (int i = 0; i < 100; ++i) rate.Update(1.0);
+  EXPECT_DOUBLE_EQ(rate.rate(), KlAdaptiveLearningRate::kMinRate);
+  for (int i = 0; i < 100; ++i) rate.Update(0.0);
+  EXPECT_DOUBLE_EQ(rate.rate(), KlAdaptiveLearningRate::kMaxRate);
+  KlAdaptiveLearningRate fixed(3e-4, 0.0);
+  EXPECT_DOUBLE_EQ(fixed.Update(5.0), 3e-4);
+
+  torch::Tensor weight = torch::zeros({2}, torch::requires_grad());
+  torch::optim::Adam adam({weight}, torch::optim::AdamOptions(1e-3));
+  rate.set_rate(2e-5);
+  rate.ApplyTo(adam);
+  EXPECT_DOUBLE_EQ(static_cast<torch::optim::AdamOptions&>(adam.param_groups()[0].options()).lr(), 2e-5);
+}
+
+TEST(KlAdaptiveLearningRateTest, KlEstimateIsHandComputedAndNeverNegative) {
+  // (r - 1) - log r for log r = log 1.5, log 0.5, 0: 0.5 - 0.405465 = 0.094535,
+  // -0.5 + 0.693147 = 0.193147, 0; mean 0.095894. Per sample it is never negative, where
+  // old - new is -0.405 for the first.
+  const torch::Tensor old_log_probs = torch::zeros({3});
+  const torch::Tensor log_probs = torch::tensor({std::log(1.5f), std::log(0.5f), 0.f});
+  EXPECT_NEAR(EstimateKl(log_probs, old_log_probs).item<double>(), (0.094535 + 0.193147) / 3, 1e-5);
+  EXPECT_NEAR(EstimateKl(old_log_probs, old_log_probs).item<double>(), 0.0, 1e-9);
+  const torch::Tensor random = torch::randn({64});
+  EXPECT_GE(EstimateKl(random, torch::randn({64})).item<double>(), 0.0);
+}
 
 TEST(AmpLossTest, LeastSquaresHandComputed) {
   // expert d = [1, 0, 2]: (d - 1)^2 = [0, 1, 1], 0.5 * mean = 1/3

@@ -23,6 +23,7 @@ absl::Status CheckConfig(const FamilyTrainerConfig& c) {
     return absl::InvalidArgumentError("--residual_scale: outside (0, 10]");
   }
   if (!(c.learning_rate > 0 && c.learning_rate < 1)) return absl::InvalidArgumentError("--learning_rate: outside (0, 1)");
+  if (!(c.target_kl >= 0 && c.target_kl < 10)) return absl::InvalidArgumentError("--family_target_kl: outside [0, 10)");
   if (c.net_every < 1) return absl::InvalidArgumentError("--family_net_every: must be >= 1");
   return absl::OkStatus();
 }
@@ -55,6 +56,8 @@ absl::StatusOr<std::unique_ptr<FamilyTrainer>> FamilyTrainer::Create(FamilyTrain
   trainer->model_ = FamilyActorCritic(policy);
   trainer->optimizer_ = std::make_unique<torch::optim::Adam>(trainer->model_->parameters(),
                                                              torch::optim::AdamOptions(trainer->config_.learning_rate));
+  trainer->learning_rate_ =
+      std::make_unique<KlAdaptiveLearningRate>(trainer->config_.learning_rate, trainer->config_.target_kl);
   trainer->elites_ = std::make_unique<EliteSet>(trainer->space_->dims(), trainer->frames_, trainer->action_size_);
   trainer->net_ = ParameterizationNet(ParameterizationNetConfig{trainer->space_->dims(), trainer->action_size_});
   trainer->net_optimizer_ = std::make_unique<torch::optim::Adam>(trainer->net_->parameters(), torch::optim::AdamOptions(1e-3));

@@ -32,6 +32,7 @@
 #include "learner/family/family_policy.h"
 #include "learner/family/parameter_curriculum.h"
 #include "learner/family/parameterization_net.h"
+#include "learner/kl_adaptive_learning_rate.h"
 
 namespace modskill::learner::family {
 
@@ -45,7 +46,8 @@ struct FamilyTrainerConfig {
   int horizon = 64;                 // steps per env per iteration
   int epochs = 4;
   int minibatches = 4;
-  double learning_rate = 3e-4;
+  double learning_rate = 3e-4;      // the first; then steered by target_kl
+  double target_kl = 0.01;          // KlAdaptiveLearningRate's target; 0 keeps learning_rate fixed
   double gamma = 0.95, lambda = 0.95;  // DESIGN.md
   double clip_ratio = 0.2;
   double residual_scale = 0.3;
@@ -73,6 +75,8 @@ struct FamilyIterationStats {
   const char* mode = "exploration";
   double net_loss = 0;
   double approx_kl = 0;
+  double learning_rate = 0;  // at the iteration's end
+  double action_std = 0;     // the policy's exploration noise, exp(log_std) averaged over the actions
 };
 
 // One evaluated episode at fixed parameters (FamilyTrainer::Evaluate).
@@ -110,6 +114,7 @@ class FamilyTrainer {
   FamilyActorCritic& model() { return model_; }
   ParameterizationNet& parameterization() { return net_; }
   int64_t env_steps() const { return env_steps_; }
+  double learning_rate() const { return learning_rate_->rate(); }  // PPO's, as the KL steered it
 
  private:
   // One iteration's samples, [T] lists of [N] (or [N, ...]) tensors.
@@ -156,6 +161,7 @@ class FamilyTrainer {
   std::unique_ptr<EliteSet> elites_;
   FamilyActorCritic model_{nullptr};
   std::unique_ptr<torch::optim::Adam> optimizer_;
+  std::unique_ptr<KlAdaptiveLearningRate> learning_rate_;
   ParameterizationNet net_{nullptr};
   std::unique_ptr<torch::optim::Adam> net_optimizer_;
   int obs_size_ = 0, action_size_ = 0, time_warp_ = 0, frames_ = 0, goal_start_ = 0;

@@ -47,6 +47,7 @@ absl::Status FamilyTrainer::SaveCheckpoint() const {
                                              torch::kChar).clone());
     archive.write("counters", torch::tensor({static_cast<int64_t>(iteration_), env_steps_,
                                              static_cast<int64_t>(wall_s_ * 1000)}));
+    archive.write("learning_rate", torch::tensor({learning_rate_->rate()}, torch::kDouble));
     std::vector<torch::Tensor> params, fitness, trajectories;
     for (int64_t id : elites_->Ids()) {
       const Elite& elite = elites_->elite(id);
@@ -112,6 +113,9 @@ absl::Status FamilyTrainer::LoadCheckpoint() {
     iteration_ = static_cast<int>(counters[0].item<int64_t>());
     env_steps_ = counters[1].item<int64_t>();
     wall_s_ = counters[2].item<int64_t>() / 1000.0;
+    // Checkpoints from before the KL-steered rate have none: the configured rate then.
+    if (torch::Tensor rate; archive.try_read("learning_rate", rate)) learning_rate_->set_rate(rate.item<double>());
+    learning_rate_->ApplyTo(*optimizer_);
     torch::Tensor params, fitness, trajectories;
     if (archive.try_read("elite_params", params)) {
       archive.read("elite_fitness", fitness);
@@ -137,11 +141,11 @@ absl::Status FamilyTrainer::AppendProgress(const FamilyIterationStats& s) const 
   std::ofstream out(path, std::ios::app);
   if (fresh) {
     out << "iteration,env_steps,wall_s,episodes,mean_return,mean_length,mean_fitness,elites,coverage,"
-           "curriculum_mode,exploration_rate,net_loss,approx_kl\n";
+           "curriculum_mode,exploration_rate,net_loss,approx_kl,learning_rate,action_std\n";
   }
-  out << absl::StrFormat("%d,%d,%.1f,%d,%.4f,%.2f,%.4f,%d,%.4f,%s,%.4f,%.6f,%.6f\n", s.iteration, s.env_steps,
+  out << absl::StrFormat("%d,%d,%.1f,%d,%.4f,%.2f,%.4f,%d,%.4f,%s,%.4f,%.6f,%.6f,%.3g,%.4f\n", s.iteration, s.env_steps,
                          s.wall_s, s.episodes, s.mean_return, s.mean_length, s.mean_fitness, s.elites, s.coverage,
-                         s.mode, s.exploration_rate, s.net_loss, s.approx_kl);
+                         s.mode, s.exploration_rate, s.net_loss, s.approx_kl, s.learning_rate, s.action_std);
   if (!out) return absl::InternalError(absl::StrCat(path, ": cannot append"));
   return absl::OkStatus();
 }

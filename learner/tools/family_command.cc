@@ -21,6 +21,9 @@ ABSL_FLAG(std::vector<std::string>, param, {},
 ABSL_FLAG(int, family_net_every, 10, "--family: iterations between fits of the parameterization network P(a)");
 // 0.1: the authors' public code admits no elite below F = 0.1.
 ABSL_FLAG(double, family_acceptance, 0.1, "--family: fitness an elite needs to count as covering its parameters");
+ABSL_FLAG(double, family_target_kl, 0.01,
+          "--family: the KL per PPO minibatch step that steers the learning rate (divided or multiplied by 1.5 "
+          "when the KL is above twice or below half of it); 0 keeps --learning_rate fixed");
 ABSL_FLAG(std::vector<std::string>, family_eval, {},
           "--family: after training (--iterations 0: only), roll the policy out at these values of the first "
           "varied parameter (the others at mid-range) and write run_dir/family_eval.csv: apex, flight time, F");
@@ -90,6 +93,7 @@ absl::StatusOr<family::FamilyTrainerConfig> FamilyConfigFromFlags(const std::str
   if (absl::GetFlag(FLAGS_epochs) > 0) config.epochs = absl::GetFlag(FLAGS_epochs);
   if (absl::GetFlag(FLAGS_learning_rate) > 0) config.learning_rate = absl::GetFlag(FLAGS_learning_rate);
   config.residual_scale = absl::GetFlag(FLAGS_residual_scale);
+  config.target_kl = absl::GetFlag(FLAGS_family_target_kl);
   config.net_every = absl::GetFlag(FLAGS_family_net_every);
   config.coverage.acceptance = absl::GetFlag(FLAGS_family_acceptance);
   return config;

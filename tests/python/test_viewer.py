@@ -202,6 +202,38 @@ class OfflineViewerTest(unittest.TestCase):
         self.assertEqual(sorted(os.listdir(self.dir)), before)
         self.assertEqual(os.listdir(taken), [])
 
+    def test_family_limbs_are_drawn_at_their_scale(self):
+        def family_rollout(clip, **params):
+            r = rollout_without_frames(clip)
+            frames = small_clip(frames=3)
+            r.ref_body_pos = r.sim_body_pos = frames.ref_pos
+            r.ref_body_rot = r.sim_body_rot = frames.ref_rot
+            r.body_error_m = np.zeros(3, np.float32)
+            r.done = np.array([False, False, True])
+            r.terminated = np.zeros(3, np.bool_)
+            r.family = {"params": params}
+            return r
+
+        plain = [expected_geom(g) for g in self.spec.body_geometry]
+        path = os.path.join(self.dir, "legs.html")
+        with three_js(self.fake):
+            modskill.viewer.write_html(path, self.spec, [family_rollout("a", leg_scale=1.2, gravity=9.0),
+                                                         family_rollout("b", leg_scale=1.2)])
+        pelvis, hip, ankle = (b["geom"] for b in read_scene(path)["bodies"])
+        self.assertEqual(pelvis, plain[0])  # neither a leg nor an arm
+        self.assertAlmostEqual(hip["radius"], 1.2 * plain[1]["radius"])
+        np.testing.assert_allclose(hip["to"], 1.2 * np.array(plain[1]["to"]))
+        np.testing.assert_allclose(ankle["half_extents"], 1.2 * np.array(plain[2]["half_extents"]))
+        np.testing.assert_allclose(ankle["center"], 1.2 * np.array(plain[2]["center"]))
+        with three_js(self.fake):
+            modskill.viewer.write_html(path, self.spec, [family_rollout("a", arm_scale=0.8)])
+        self.assertEqual([b["geom"] for b in read_scene(path)["bodies"]], plain)  # no arms here
+        self.assertEqual(modskill.viewer.limb_scale_of("R_Elbow", 1.2, 0.8), 0.8)
+        with three_js(self.fake), self.assertRaisesRegex(ValueError, "a 1.2/1.0, b 0.8/1.0.*one page per scale"):
+            modskill.viewer.write_html(os.path.join(self.dir, "mixed.html"), self.spec,
+                                       [family_rollout("a", leg_scale=1.2), family_rollout("b", leg_scale=0.8)])
+        self.assertFalse(os.path.exists(os.path.join(self.dir, "mixed.html")))
+
     def test_bad_clips_name_the_clip_and_leave_no_file(self):
         path = os.path.join(self.dir, "page.html")
         nan = small_clip(name="nan_clip")

@@ -14,6 +14,12 @@ three.js and the scene are inlined, so it opens from disk, offline, in any brows
 ``write_clips_html`` draws :class:`ViewerClip` s built from numpy arrays instead (a reference
 alone, or your own simulated poses beside it).
 
+A motor-skill family's rollouts at ``leg_scale`` or ``arm_scale`` are drawn with their limbs at
+that scale, as ``modskill-client rollout --html`` draws them (the rule of
+common/policy/family_parameters.cc, ``FamilyLimbScale``: bodies named Hip, Knee, Ankle or Toe
+follow the legs, Shoulder, Elbow, Wrist or Hand the arms). A page has one skeleton, so the
+rollouts of one page must share their scales.
+
 three.js is read from ``$MODSKILL_THREE_JS`` or Debian's libjs-three
 (/usr/share/javascript/three/three.min.js). The page template is package data
 (``viewer_page.html``, a copy of common/viewer/viewer_page.html; tests/python/test_viewer.py
@@ -33,14 +39,14 @@ import math
 import os
 import re
 import tempfile
-from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Union
+from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
 from .types import BodyGeometry, ClipRollout, EnvSpec
 
 __all__ = ["ViewerClip", "write_html", "write_clips_html", "clip_from_rollout", "load_three_js",
-           "three_js_path", "page_template", "DEFAULT_THREE_JS", "FLAG_DONE", "FLAG_TERMINATED", "FLAG_TRUNCATED"]
+           "three_js_path", "page_template", "rollout_limb_scale", "limb_scale_of", "DEFAULT_THREE_JS", "FLAG_DONE", "FLAG_TERMINATED", "FLAG_TRUNCATED"]
 
 PathLike = Union[str, "os.PathLike[str]"]
 
@@ -108,17 +114,20 @@ def write_html(path: PathLike, spec: EnvSpec, rollouts: Sequence[ClipRollout], t
 
     Raises:
       ValueError: a rollout without frames, poses of the wrong shape or not finite (naming the
-        clip), a spec without geometry, or an unusable three.js.
+        clip), a spec without geometry, family rollouts at different limb scales, or an unusable
+        three.js.
       OSError: three.js is missing, or ``path`` cannot be written (naming the path).
     """
     captions = _captions(labels)
     clips = [clip_from_rollout(r, captions.get(r.clip, "")) for r in rollouts]
-    write_clips_html(path, spec, clips, title)
+    write_clips_html(path, spec, clips, title, limb_scale=rollout_limb_scale(rollouts))
 
 
-def write_clips_html(path: PathLike, spec: EnvSpec, clips: Sequence[ViewerClip], title: str = "") -> None:
-    """Writes a page of :class:`ViewerClip` s; errors as :func:`write_html`."""
-    scene = _scene(spec, clips, title)
+def write_clips_html(path: PathLike, spec: EnvSpec, clips: Sequence[ViewerClip], title: str = "",
+                     limb_scale: Tuple[float, float] = (1.0, 1.0)) -> None:
+    """Writes a page of :class:`ViewerClip` s, the limbs drawn at ``limb_scale`` = (leg_scale,
+    arm_scale); errors as :func:`write_html`."""
+    scene = _scene(spec, clips, title, limb_scale)
     page = _render(scene, title, load_three_js())
     _write_atomically(path, page)
 
@@ -143,6 +152,30 @@ def load_three_js() -> bytes:
     if b"</script" in text.lower():
         raise ValueError(f"three.js for the HTML viewer: {path}: contains '</script', cannot be inlined")
     return text
+
+
+def rollout_limb_scale(rollouts: Sequence[ClipRollout]) -> Tuple[float, float]:
+    """(leg_scale, arm_scale) the rollouts ran at: 1 where a rollout is no family's or leaves the
+    parameter out. ValueError naming each clip's scales when they differ (one page, one skeleton)."""
+    scales = {}
+    for r in rollouts:
+        params = (r.family or {}).get("params", {})
+        scales[r.clip] = (float(params.get("leg_scale", 1.0)), float(params.get("arm_scale", 1.0)))
+    distinct = set(scales.values())
+    if len(distinct) > 1:
+        listed = ", ".join(f"{clip} {leg}/{arm}" for clip, (leg, arm) in scales.items())
+        raise ValueError(f"rollouts: family rollouts at different leg_scale/arm_scale ({listed}): "
+                         "write one page per scale")
+    return distinct.pop() if distinct else (1.0, 1.0)
+
+
+def limb_scale_of(body_name: str, leg_scale: float, arm_scale: float) -> float:
+    """The scale a body's geometry takes in a family at (leg_scale, arm_scale): FamilyLimbScale's rule."""
+    if any(part in body_name for part in ("Hip", "Knee", "Ankle", "Toe")):
+        return leg_scale
+    if any(part in body_name for part in ("Shoulder", "Elbow", "Wrist", "Hand")):
+        return arm_scale
+    return 1.0
 
 
 def _captions(labels) -> Dict[str, str]:
@@ -176,7 +209,22 @@ def _geom(geometry: BodyGeometry, where: str) -> Dict[str, Any]:
     raise ValueError(f"{where}.shape: {geometry.shape!r} is not sphere, capsule or box")
 
 
-def _bodies(spec: EnvSpec) -> List[Dict[str, Any]]:
+def _scaled(geom: Dict[str, Any], scale: float) -> Dict[str, Any]:
+    """A body's geometry grown by ``scale`` about its frame, as RolloutViewerRecorder::ScaleFamilyLimbs."""
+    if scale == 1.0:
+        return geom
+    grown = {}
+    for key, value in geom.items():
+        if key == "radius":
+            grown[key] = value * scale
+        elif isinstance(value, list):
+            grown[key] = [v * scale for v in value]
+        else:
+            grown[key] = value
+    return grown
+
+
+def _bodies(spec: EnvSpec, limb_scale: Tuple[float, float] = (1.0, 1.0)) -> List[Dict[str, Any]]:
     geometry = getattr(spec, "body_geometry", ())
     if not geometry:
         raise ValueError("spec: no body_geometry (a spec from a server older than the viewer?)")
@@ -187,7 +235,8 @@ def _bodies(spec: EnvSpec) -> List[Dict[str, Any]]:
         where = f"spec.body_geometry[{b}] ({name})"
         if g.parent >= b or g.parent < (-1 if b == 0 else 0):
             raise ValueError(f"{where}.parent: {g.parent} is not an earlier body")
-        bodies.append({"name": name, "parent": int(g.parent), "geom": _geom(g, where)})
+        geom = _scaled(_geom(g, where), limb_scale_of(name, *limb_scale))
+        bodies.append({"name": name, "parent": int(g.parent), "geom": geom})
     return bodies
 
 
@@ -241,8 +290,12 @@ def _clip(clip: ViewerClip, index: int, spec: EnvSpec) -> Dict[str, Any]:
             "tracks": json_tracks, "body_error": body_error, "flags": flags}
 
 
-def _scene(spec: EnvSpec, clips: Sequence[ViewerClip], title: str) -> Dict[str, Any]:
-    bodies = _bodies(spec)
+def _scene(spec: EnvSpec, clips: Sequence[ViewerClip], title: str,
+           limb_scale: Tuple[float, float] = (1.0, 1.0)) -> Dict[str, Any]:
+    leg, arm = (float(s) for s in limb_scale)
+    if not all(math.isfinite(s) and s > 0 for s in (leg, arm)):
+        raise ValueError(f"limb_scale: {list(limb_scale)} is not two finite positive scales")
+    bodies = _bodies(spec, (leg, arm))
     if not clips:
         raise ValueError("viewer page: no clips")
     return {"version": 1, "title": title, "bodies": bodies,
