@@ -64,7 +64,20 @@ TEST(ActionMappingTest, ResidualZeroIsTheReferencePoseClampedToTheRange) {
     }
   }
   EXPECT_GT(inside, 50);
+  // Unclamped (a motor-skill family's mapping), a full action pushes past the range's ends.
+  std::fill(action.begin(), action.end(), 1.0f);
+  ActionMapping unclamped = residual;
+  unclamped.clamp_to_joint_range = false;
+  MapActionToPdTargets(unclamped, humanoid, spec, action.data(), reference, targets.data());
+  int beyond = 0;
+  for (int a = 0; a < spec.action_size; ++a) {
+    const int h = spec.action_hinge[a];
+    EXPECT_NEAR(targets[h], reference[h] + 0.5 * humanoid.action_scale()[h], 1e-6) << h;
+    beyond += targets[h] > humanoid.spec().body(1 + h / 3).range_high[h % 3];
+  }
+  EXPECT_GT(beyond, 0);
   // Absolute mode ignores the reference: offset + scale * a.
+  std::fill(action.begin(), action.end(), 0.2f);
   MapActionToPdTargets(ActionMapping{}, humanoid, spec, action.data(), reference, targets.data());
   for (int a = 0; a < spec.action_size; ++a) {
     const int h = spec.action_hinge[a];

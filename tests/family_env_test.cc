@@ -159,6 +159,32 @@ TEST(FamilyEnvTest, JointsHaveThePapersTorqueLimitsByGroupScaledByMass) {
   for (int a = 0; a < own->nu; ++a) EXPECT_DOUBLE_EQ(hinges[a], own->actuator_forcerange[2 * a + 1]) << a;
 }
 
+TEST(FamilyEnvTest, DisplacementsAreNotClampedIntoTheJointRanges) {
+  // Position servos get ctrl = the PD target: a full displacement reaches past some hinge's range
+  // in a family (ActionMapping::clamp_to_joint_range), never in tracking.
+  auto count_beyond = [](EnvBatch& envs) {
+    std::vector<float> actions(envs.spec().action_size, 1.f);
+    if (envs.spec().time_warp_action >= 0) actions[envs.spec().time_warp_action] = 0.f;
+    EXPECT_TRUE(envs.Step(actions).ok());
+    const mjModel* model = envs.humanoid().model();
+    int beyond = 0;
+    for (int h = 0; h < model->nu; ++h) {
+      const int joint = model->actuator_trnid[2 * h];
+      beyond += envs.env(0).data()->ctrl[h] > model->jnt_range[2 * joint + 1] + 1e-9;
+    }
+    return beyond;
+  };
+  auto family = EnvBatch::Create(FamilyConfig({{"gravity", 9.81, 9.81}}, 1), Clip("deepmimic_jump"));
+  ASSERT_TRUE(family.ok()) << family.status();
+  (*family)->Reset();
+  EXPECT_GT(count_beyond(**family), 0);
+  EnvBatchConfig tracking = FamilyConfig({}, 1);
+  auto tracker = EnvBatch::Create(tracking, Clip("deepmimic_jump"));
+  ASSERT_TRUE(tracker.ok()) << tracker.status();
+  (*tracker)->Reset();
+  EXPECT_EQ(count_beyond(**tracker), 0);
+}
+
 TEST(FamilyEnvTest, LowerGravityJumpsHigher) {
   auto batch = EnvBatch::Create(FamilyConfig({{"gravity", 4, 14}}, 1), Clip("deepmimic_jump"));
   ASSERT_TRUE(batch.ok()) << batch.status();

@@ -20,7 +20,8 @@ void MapActionToPdTargets(const ActionMapping& mapping, const HumanoidModel& hum
       // The range is offset +- half of it; scale = min(1.2 * half range, pi).
       const BodySpec& body = humanoid.spec().body(1 + h / 3);
       const double target = reference_dof[h] + mapping.residual_scale * scale[h] * clamped;
-      pd_targets[h] = std::clamp(target, body.range_low[h % 3], body.range_high[h % 3]);
+      pd_targets[h] = mapping.clamp_to_joint_range ? std::clamp(target, body.range_low[h % 3], body.range_high[h % 3])
+                                                   : target;
     }
   }
 }

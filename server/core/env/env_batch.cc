@@ -73,6 +73,8 @@ absl::Status SetUpFamily(EnvContext& context, EnvSpec* spec) {
   // motion (a jump) negative, and a policy then learns to end its episodes early; the column
   // stays, at 0.
   context.config.reward.energy_coefficient = 0;
+  // Displacements are not clamped into the joint ranges (ActionMapping::clamp_to_joint_range).
+  context.config.action.clamp_to_joint_range = false;
   AddFamilyToSpec(env.family, spec);
   return absl::OkStatus();
 }
