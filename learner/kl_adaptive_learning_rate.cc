@@ -24,7 +24,7 @@ void KlAdaptiveLearningRate::ApplyTo(torch::optim::Adam& optimizer) const {
 
 torch::Tensor EstimateKl(const torch::Tensor& log_probs, const torch::Tensor& old_log_probs) {
   torch::NoGradGuard no_grad;
-  const torch::Tensor log_ratio = log_probs.detach() - old_log_probs;
+  const torch::Tensor log_ratio = log_probs - old_log_probs;
   return (torch::exp(log_ratio) - 1 - log_ratio).mean();
 }
 
