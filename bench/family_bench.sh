@@ -4,7 +4,8 @@
 # coverage of the range over training time (DIR/coverage.png from DIR/run/progress.csv).
 #
 #   bench/family_bench.sh --out DIR [--minutes 20] [--clip deepmimic_jump]
-#       [--param gravity=4:14 ...] [--eval 5,9.81,14] [--resume] [-- LEARNER_FLAGS...]
+#       [--param gravity=4:14 ...] [--eval 5,9.81,14] [--resume] [--server_flags "FLAGS"]
+#       [-- LEARNER_FLAGS...]
 #
 # DIR/run/family_eval.csv: per evaluated value, the root's apex (m), the time with both feet off
 # the floor (s) and the fitness. --resume continues DIR/run (a run in parts, its checkpoint kept).
@@ -16,7 +17,7 @@
 set -euo pipefail
 repo="$(cd "$(dirname "$0")/.." && pwd)"
 BUILD="${MODSKILL_BUILD_DIR:-$repo/build}"
-OUT="" minutes=20 clip=deepmimic_jump eval_values="5,9.81,14" resume=""
+OUT="" minutes=20 clip=deepmimic_jump eval_values="5,9.81,14" resume="" server_flags=""
 params=()
 while (($#)); do
   case "$1" in
@@ -26,6 +27,7 @@ while (($#)); do
     --param) params+=(--param "$2"); shift 2 ;;
     --eval) eval_values="$2"; shift 2 ;;
     --resume) resume="--resume"; shift ;;
+    --server_flags) server_flags="$2"; shift 2 ;;
     --) shift; break ;;
     *) echo "bench/family_bench.sh: unknown argument $1" >&2; exit 2 ;;
   esac
@@ -36,7 +38,8 @@ mkdir -p "$OUT"
 source "$repo/bench/side_by_side.sh"  # free_port, stop_servers at exit
 
 port=$(free_port)
-"$BUILD/server/modskill-server" --port "$port" --threads 1 > "$OUT/server.log" 2>&1 &
+# shellcheck disable=SC2086  # the server flags are words
+"$BUILD/server/modskill-server" --port "$port" --threads 1 $server_flags > "$OUT/server.log" 2>&1 &
 SERVERS+=($!)
 "$BUILD/learner/modskill-learner" --servers "127.0.0.1:$port" --run_dir "$OUT/run" --family "$clip" "${params[@]}" \
     --time_budget_min "$minutes" --iterations 1000000 --seed 1 --family_eval "$eval_values" $resume "$@" \

@@ -138,39 +138,48 @@ TEST(FamilyEnvTest, JointsHaveThePapersTorqueLimitsByGroupScaledByMass) {
   auto batch = EnvBatch::Create(FamilyConfig({{"gravity", 9.81, 9.81}}, 1), Clip("deepmimic_jump"));
   ASSERT_TRUE(batch.ok()) << batch.status();
   EnvBatch& envs = **batch;
-  const mjModel* own = envs.env(0).family()->model();
-  const mjModel* shared = envs.humanoid().model();
-  const double scale = mj_getTotalmass(shared) / 61.7;  // Lee et al.'s character weighs 61.7 kg
-  auto limit = [&](const mjModel* m, const std::string& actuator) {
-    const int a = mj_name2id(m, mjOBJ_ACTUATOR, actuator.c_str());
-    EXPECT_GE(a, 0) << actuator;
-    return a < 0 ? 0.0 : m->actuator_forcerange[2 * a + 1];
-  };
-  EXPECT_NEAR(limit(own, "L_Hip_x"), 200 * scale, 1e-9);
-  EXPECT_NEAR(limit(own, "R_Knee_y"), 150 * scale, 1e-9);
-  EXPECT_NEAR(limit(own, "L_Ankle_z"), 90 * scale, 1e-9);
-  EXPECT_NEAR(limit(own, "Neck_x"), 50 * scale, 1e-9);
-  EXPECT_NEAR(limit(own, "R_Shoulder_x"), 100 * scale, 1e-9);
-  EXPECT_NEAR(limit(own, "L_Elbow_y"), 60 * scale, 1e-9);
-  EXPECT_NEAR(limit(shared, "L_Hip_x"), 500, 1e-9) << "tracking sessions keep PHC's limits";
-  // The same numbers reach stable PD, hinge by hinge.
+  // A family simulates with stable PD, whose limits bound the damping too (ModelForTask).
+  EXPECT_EQ(envs.humanoid().options().pd_mode, PdMode::kStablePd);
+  const HumanoidSpec& spec = envs.humanoid().spec();
+  const double scale = mj_getTotalmass(envs.humanoid().model()) / 61.7;  // Lee et al.'s character: 61.7 kg
   const std::vector<double>& hinges = envs.env(0).family()->torque_limits();
-  ASSERT_EQ(static_cast<int>(hinges.size()), own->nu);
-  for (int a = 0; a < own->nu; ++a) EXPECT_DOUBLE_EQ(hinges[a], own->actuator_forcerange[2 * a + 1]) << a;
+  ASSERT_EQ(static_cast<int>(hinges.size()), envs.humanoid().num_hinges());
+  auto limit = [&](const char* body, int axis) { return hinges[3 * (spec.BodyIndex(body) - 1) + axis]; };
+  EXPECT_NEAR(limit("L_Hip", 0), 200 * scale, 1e-9);
+  EXPECT_NEAR(limit("R_Knee", 1), 150 * scale, 1e-9);
+  EXPECT_NEAR(limit("L_Ankle", 2), 90 * scale, 1e-9);
+  EXPECT_NEAR(limit("Neck", 0), 50 * scale, 1e-9);
+  EXPECT_NEAR(limit("R_Shoulder", 0), 100 * scale, 1e-9);
+  EXPECT_NEAR(limit("L_Elbow", 1), 60 * scale, 1e-9);
+  EXPECT_NEAR(envs.humanoid().torque_limit()[0], 500, 1e-9) << "tracking keeps PHC's limits";
+  // They reach the physics: full displacements saturate some hinges at their limits, none beyond.
+  envs.Reset();
+  std::vector<float> actions(envs.spec().action_size, 1.f);
+  actions[envs.spec().time_warp_action] = 0.f;
+  ASSERT_TRUE(envs.Step(actions).ok());
+  const int qvel = envs.humanoid().hinge_qvel_start();
+  int saturated = 0;
+  for (size_t h = 0; h < hinges.size(); ++h) {
+    const double torque = std::abs(envs.env(0).data()->qfrc_applied[qvel + h]);
+    EXPECT_LE(torque, hinges[h] + 1e-9) << h;
+    saturated += torque > hinges[h] - 1e-9;
+  }
+  EXPECT_GT(saturated, 0);
 }
 
 TEST(FamilyEnvTest, DisplacementsAreNotClampedIntoTheJointRanges) {
-  // Position servos get ctrl = the PD target: a full displacement reaches past some hinge's range
-  // in a family (ActionMapping::clamp_to_joint_range), never in tracking.
+  // A full displacement reaches past some hinge's range in a family
+  // (ActionMapping::clamp_to_joint_range), never in tracking.
   auto count_beyond = [](EnvBatch& envs) {
     std::vector<float> actions(envs.spec().action_size, 1.f);
     if (envs.spec().time_warp_action >= 0) actions[envs.spec().time_warp_action] = 0.f;
     EXPECT_TRUE(envs.Step(actions).ok());
     const mjModel* model = envs.humanoid().model();
+    const std::vector<double>& targets = envs.env(0).pd_targets();
+    const int first_joint = envs.humanoid().options().fixed_root ? 0 : 1;  // the hinges follow the free joint
     int beyond = 0;
-    for (int h = 0; h < model->nu; ++h) {
-      const int joint = model->actuator_trnid[2 * h];
-      beyond += envs.env(0).data()->ctrl[h] > model->jnt_range[2 * joint + 1] + 1e-9;
+    for (int h = 0; h < envs.humanoid().num_hinges(); ++h) {
+      beyond += targets[h] > model->jnt_range[2 * (first_joint + h) + 1] + 1e-9;
     }
     return beyond;
   };

@@ -1,6 +1,7 @@
 // The family trainer end to end against an in-process server: iterations run, episodes reach the
 // elite set with the server's fitness, progress.csv and the checkpoint are written, a resumed run
 // continues the counters and the KL-steered learning rate and refuses another family; bad flags name themselves.
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -121,6 +122,13 @@ TEST(FamilyTrainerTest, BadSettingsAreNamed) {
   config = SmallFamily(*server, std::string(MODSKILL_TEST_TMP_DIR) + "/family_bad");
   config.target_kl = -0.1;
   EXPECT_NE(FamilyTrainer::Create(config).status().message().find("--family_target_kl"), std::string::npos);
+  for (double distance : {-1.0, std::nan(""), 1e9}) {
+    config = SmallFamily(*server, std::string(MODSKILL_TEST_TMP_DIR) + "/family_bad");
+    config.termination_distance = distance;
+    EXPECT_NE(FamilyTrainer::Create(config).status().message().find("--family_termination_distance"),
+              std::string::npos)
+        << distance;
+  }
 }
 
 }  // namespace

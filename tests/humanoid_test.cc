@@ -229,5 +229,50 @@ TEST(PdControllerTest, StablePdModeAlsoHoldsAndBothModesParse) {
   mj_deleteData(d);
 }
 
+// A family's torque limits (FamilyTorqueLimits: about 170 N*m at the knee) bound the whole PD
+// torque under stable PD, damping included. A position servo's damping is MuJoCo joint damping
+// outside the actuator's range: against a 170 N*m limit its kd 80 caps the knee's extension at
+// 170 / 80 = 2.1 rad/s, too slow to push off for a jump (env_batch.cc's ModelForTask).
+TEST(PdControllerTest, StablePdCountsDampingAgainstTheTorqueLimit) {
+  constexpr double kLimit = 170;
+  const int knee = DefaultSpec().BodyIndex("L_Knee");
+  const int hinge = 3 * (knee - 1);  // the knee flexes about its first hinge axis
+  const double kd = DefaultSpec().body(knee).kd;
+  auto fastest_extension = [&](PdMode mode) {
+    PhysicsOptions options;
+    options.fixed_root = true;
+    options.fixed_root_height = 2.5;
+    options.pd_mode = mode;
+    auto humanoid = HumanoidModel::Create(DefaultSpec(), options);
+    EXPECT_TRUE(humanoid.ok());
+    mjModel* m = mj_copyModel(nullptr, (*humanoid)->model());
+    for (int a = 0; a < m->nu; ++a) {
+      m->actuator_forcerange[2 * a] = -kLimit;
+      m->actuator_forcerange[2 * a + 1] = kLimit;
+    }
+    const std::vector<double> limits(69, kLimit);
+    PdController pd(**humanoid);
+    pd.UseModel(m);
+    pd.UseTorqueLimits(&limits);
+    mjData* d = mj_makeData(m);
+    const int qpos = (*humanoid)->hinge_qpos_start() + hinge, qvel = (*humanoid)->hinge_qvel_start() + hinge;
+    d->qpos[qpos] = 1.5;  // bent
+    std::vector<double> targets(69, 0.0);
+    targets[hinge] = -1.0;  // past straight, as a policy asks for its fastest extension
+    double fastest = 0;
+    for (int s = 0; s < 6; ++s) {
+      pd.Step(targets.data(), d);
+      fastest = std::max(fastest, -d->qvel[qvel]);
+    }
+    mj_deleteData(d);
+    mj_deleteModel(m);
+    return fastest;
+  };
+  const double servo = fastest_extension(PdMode::kPositionImplicitDamping);
+  const double stable = fastest_extension(PdMode::kStablePd);
+  EXPECT_LT(servo, 1.25 * kLimit / kd) << "stable PD: " << stable << " rad/s";
+  EXPECT_GT(stable, 3 * kLimit / kd) << "position servo: " << servo << " rad/s";
+}
+
 }  // namespace
 }  // namespace modskill

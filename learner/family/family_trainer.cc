@@ -5,6 +5,7 @@
 #include <filesystem>
 
 #include "absl/strings/str_cat.h"
+#include "common/policy/termination.h"
 #include "learner/wire_torch.h"
 
 namespace modskill::learner::family {
@@ -24,6 +25,10 @@ absl::Status CheckConfig(const FamilyTrainerConfig& c) {
   }
   if (!(c.learning_rate > 0 && c.learning_rate < 1)) return absl::InvalidArgumentError("--learning_rate: outside (0, 1)");
   if (!(c.target_kl >= 0 && c.target_kl < 10)) return absl::InvalidArgumentError("--family_target_kl: outside [0, 10)");
+  if (!(c.termination_distance >= 0 && c.termination_distance <= kMaxTerminationDistance)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--family_termination_distance: outside [0, ", kMaxTerminationDistance, "] m"));
+  }
   if (c.net_every < 1) return absl::InvalidArgumentError("--family_net_every: must be >= 1");
   return absl::OkStatus();
 }
@@ -88,6 +93,7 @@ absl::Status FamilyTrainer::Open() {
   session.add_motions(config_.clip);
   session.set_action_mode(v1::RESIDUAL);
   session.set_residual_scale(static_cast<float>(config_.residual_scale));
+  session.set_termination_distance(static_cast<float>(config_.termination_distance));
   session.set_amp_obs(v1::OMIT);
   for (const ParamRange& range : config_.ranges) {
     v1::FamilyParameterRange* wire = session.mutable_family()->add_params();

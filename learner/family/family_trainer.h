@@ -51,6 +51,9 @@ struct FamilyTrainerConfig {
   double gamma = 0.95, lambda = 0.95;  // DESIGN.md
   double clip_ratio = 0.2;
   double residual_scale = 0.3;
+  // An episode fails when a body is this far from its reference (m); 0: the server's family
+  // default (kFamilyDefaultTerminationDistance, 1 m).
+  double termination_distance = 0;
   int max_iterations = 0;           // this process's; 0: no limit
   int64_t max_env_steps = 0;        // 0: no limit
   double max_minutes = 0;           // 0: no limit

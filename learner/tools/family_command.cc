@@ -24,6 +24,9 @@ ABSL_FLAG(double, family_acceptance, 0.1, "--family: fitness an elite needs to c
 ABSL_FLAG(double, family_target_kl, 0.01,
           "--family: the KL per PPO minibatch step that steers the learning rate (divided or multiplied by 1.5 "
           "when the KL is above twice or below half of it); 0 keeps --learning_rate fixed");
+ABSL_FLAG(double, family_termination_distance, 0,
+          "--family: an episode fails when a body is farther from its reference (m); 0: the server's family "
+          "default, 1 m");
 ABSL_FLAG(std::vector<std::string>, family_eval, {},
           "--family: after training (--iterations 0: only), roll the policy out at these values of the first "
           "varied parameter (the others at mid-range) and write run_dir/family_eval.csv: apex, flight time, F");
@@ -94,6 +97,7 @@ absl::StatusOr<family::FamilyTrainerConfig> FamilyConfigFromFlags(const std::str
   if (absl::GetFlag(FLAGS_learning_rate) > 0) config.learning_rate = absl::GetFlag(FLAGS_learning_rate);
   config.residual_scale = absl::GetFlag(FLAGS_residual_scale);
   config.target_kl = absl::GetFlag(FLAGS_family_target_kl);
+  config.termination_distance = absl::GetFlag(FLAGS_family_termination_distance);
   config.net_every = absl::GetFlag(FLAGS_family_net_every);
   config.coverage.acceptance = absl::GetFlag(FLAGS_family_acceptance);
   return config;

@@ -44,17 +44,23 @@ void SetUpTask(EnvContext& context) {
 }
 
 // The strike task needs its target in the model, a family with obstacle parameters its obstacle;
-// every other session runs on the model as given.
+// a family also needs stable PD (below). Every other session runs on the model as given.
 absl::StatusOr<std::shared_ptr<const HumanoidModel>> ModelForTask(std::shared_ptr<const HumanoidModel> humanoid,
                                                                   const TrackingEnvConfig& env) {
   const bool strike = env.task == TaskKind::kStrike &&
                       mj_name2id(humanoid->model(), mjOBJ_BODY, kStrikeTargetName) < 0;
   const bool obstacle = FamilyNeedsObstacle(env.family) &&
                         mj_name2id(humanoid->model(), mjOBJ_GEOM, kFamilyObstacleName) < 0;
-  if (!strike && !obstacle) return humanoid;
+  // Under the paper's torque limits a position servo's damping, MuJoCo joint damping outside the
+  // actuator's force range, brakes a knee extending at 5 rad/s with 400 N*m against a 170 N*m
+  // limit: the character cannot push off. Stable PD limits the whole PD torque, damping included,
+  // as Lee et al.'s servos do (family_pd_test.cc measures both).
+  const bool stable_pd = !env.family.empty() && humanoid->options().pd_mode != PdMode::kStablePd;
+  if (!strike && !obstacle && !stable_pd) return humanoid;
   PhysicsOptions physics = humanoid->options();
   physics.strike_target |= strike;
   physics.family_obstacle |= obstacle;
+  if (stable_pd) physics.pd_mode = PdMode::kStablePd;
   return HumanoidModel::Create(humanoid->spec(), physics);
 }
 

@@ -113,6 +113,11 @@ absl::StatusOr<std::shared_ptr<const FamilyContext>> MakeFamilyContext(std::vect
                                                                        std::shared_ptr<const HumanoidModel> shared,
                                                                        const MotionClip& clip) {
   const HumanoidModel& humanoid = *shared;
+  // The paper's torque limits bound the whole PD torque only under stable PD (env_batch.cc's
+  // ModelForTask builds a family's model so).
+  if (humanoid.options().pd_mode != PdMode::kStablePd) {
+    return absl::InternalError("family: the session's model must use stable PD (pd_mode stable_pd)");
+  }
   auto family = std::make_shared<FamilyContext>();
   family->gravity = IndexOf(ranges, "gravity");
   family->body_mass_scale = IndexOf(ranges, "body_mass_scale");
@@ -166,7 +171,6 @@ double PhaseStep(float tau) { return std::exp(std::clamp(1.5 * static_cast<doubl
 
 FamilyEpisode::FamilyEpisode(const FamilyContext* family, const mjModel* base)
     : family_(family), base_(base), model_(mj_copyModel(nullptr, base)) {
-  ApplyTorqueLimits();
   if (family->body_models != nullptr) scaled_clip_ = std::make_shared<MotionClip>();
   root_start_height_ = family->root_start_height;
   effector_start_height_ = family->effector_start_height;
@@ -179,17 +183,6 @@ FamilyEpisode::FamilyEpisode(const FamilyContext* family, const mjModel* base)
 }
 
 FamilyEpisode::~FamilyEpisode() { mj_deleteModel(model_); }
-
-void FamilyEpisode::ApplyTorqueLimits() {
-  // Position servos (one per hinge, in hinge order) clamp to the paper's limits; stable PD reads
-  // them through PdController::UseTorqueLimits.
-  if (model_->nu != static_cast<int>(family_->hinge_torque_limit.size())) return;
-  for (int a = 0; a < model_->nu; ++a) {
-    model_->actuator_forcelimited[a] = 1;
-    model_->actuator_forcerange[2 * a] = -family_->hinge_torque_limit[a];
-    model_->actuator_forcerange[2 * a + 1] = family_->hinge_torque_limit[a];
-  }
-}
 
 void FamilyEpisode::SetNext(const float* a) {
   std::copy_n(a, next_.size(), next_.begin());
@@ -221,7 +214,6 @@ absl::Status FamilyEpisode::UseBodyProportions(const MotionClip& clip) {
   if (!model.ok()) return model.status();
   // Same layout (FamilyBodyModels checks): the numbers are copied into this env's buffer.
   mj_copyModel(model_, (*model)->model());
-  ApplyTorqueLimits();
   if (absl::Status status = ScaleClip(clip, (*model)->spec(), leg, scaled_clip_.get()); !status.ok()) return status;
   body_model_ = *std::move(model);
   // The heights a peak must clear are the scaled clip's.
@@ -245,7 +237,6 @@ absl::Status FamilyEpisode::ApplyToModel(const MotionClip& clip) {
       // The session's own body then: its numbers back in this env's copy.
       body_model_ = nullptr;
       mj_copyModel(model_, base_);
-      ApplyTorqueLimits();
       root_start_height_ = family_->root_start_height;
       effector_start_height_ = family_->effector_start_height;
       foot_contact_height_ = family_->foot_contact_height;

@@ -140,7 +140,6 @@ class FamilyEpisode {
   double Param(int index, double default_value) const { return index >= 0 ? a_[index] : default_value; }
   absl::Status ApplyToModel(const MotionClip& clip);
   absl::Status UseBodyProportions(const MotionClip& clip);
-  void ApplyTorqueLimits();
   void PlaceObstacle(const MotionClip& clip);
   float PeakSpike(double height, double vertical_velocity, double threshold, int param, double* prev_velocity,
                   bool* scored, double* constraint) const;

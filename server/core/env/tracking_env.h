@@ -110,6 +110,8 @@ class TrackingEnv {
   // With auto_reset off: the episode has ended and the env waits for a reset.
   bool finished() const { return finished_; }
   int64_t physics_resets() const { return physics_resets_; }
+  // The PD targets of the last step (one per hinge, radians), as the servos got them.
+  const std::vector<double>& pd_targets() const { return pd_targets_; }
   // Reward terms and errors of the current state against the reference at the current frame.
   TrackingErrors CurrentTrackingTerms(float* terms);
   // Family sessions: the parameters a of this env's next episode (one per range, inside it).
