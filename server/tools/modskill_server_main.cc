@@ -35,7 +35,8 @@ ABSL_FLAG(int, max_message_mb, 512, "largest gRPC message, in MiB");
 ABSL_FLAG(std::string, auth_token_file, "", "file holding a token; every call then needs 'authorization: Bearer <token>'");
 ABSL_FLAG(std::string, tls_cert, "", "PEM certificate chain (with --tls_key: serve TLS)");
 ABSL_FLAG(std::string, tls_key, "", "PEM private key");
-ABSL_FLAG(std::string, pd_mode, "position_implicit", "position_implicit or stable_pd");
+ABSL_FLAG(std::string, pd_mode, "position_implicit",
+          "position_implicit or stable_pd (motor-skill family sessions always run stable_pd)");
 ABSL_FLAG(std::string, sampling, "failure_count",
           "how sessions pick clips from ReportFailures: failure_count (PHC: probability ~ recent failures), "
           "decay_on_success (ProtoMotions: weight x0.999 per success, 1 per failure) or uniform");

@@ -54,7 +54,7 @@ absl::StatusOr<std::shared_ptr<const HumanoidModel>> ModelForTask(std::shared_pt
   // Under the paper's torque limits a position servo's damping, MuJoCo joint damping outside the
   // actuator's force range, brakes a knee extending at 5 rad/s with 400 N*m against a 170 N*m
   // limit: the character cannot push off. Stable PD limits the whole PD torque, damping included,
-  // as Lee et al.'s servos do (family_pd_test.cc measures both).
+  // as Lee et al.'s servos do (PdControllerTest.StablePdCountsDampingAgainstTheTorqueLimit).
   const bool stable_pd = !env.family.empty() && humanoid->options().pd_mode != PdMode::kStablePd;
   if (!strike && !obstacle && !stable_pd) return humanoid;
   PhysicsOptions physics = humanoid->options();
