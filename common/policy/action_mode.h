@@ -27,9 +27,9 @@ struct ActionMapping {
   ActionMode mode = ActionMode::kAbsolute;
   double residual_scale = kDefaultResidualScale;  // residual only
   // Residual only: clamp each target into its hinge's range. A motor-skill family does not: a
-  // target beyond the range is what lets a PD servo whose damping brakes a fast extension still
-  // push to the end of the range (a jump's knees and hips), as the authors' targets (reference
-  // + up to 0.7 pi, unclamped) do; the joint's own limit still stops the hinge.
+  // target beyond the range lets the servo keep pushing at full torque to the end of the range
+  // (a jump's knees and hips), as the authors' targets (reference + up to 0.7 pi, unclamped) do;
+  // the joint's own limit still stops the hinge.
   bool clamp_to_joint_range = true;
 
   // residual_scale finite and in (0, kMaxResidualScale]; the message names `field`.

@@ -25,9 +25,11 @@ absl::Status CheckConfig(const FamilyTrainerConfig& c) {
   }
   if (!(c.learning_rate > 0 && c.learning_rate < 1)) return absl::InvalidArgumentError("--learning_rate: outside (0, 1)");
   if (!(c.target_kl >= 0 && c.target_kl < 10)) return absl::InvalidArgumentError("--family_target_kl: outside [0, 10)");
-  if (!(c.termination_distance >= 0 && c.termination_distance <= kMaxTerminationDistance)) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("--family_termination_distance: outside [0, ", kMaxTerminationDistance, "] m"));
+  // 0 leaves the server's family default; any other value is checked as the server checks it.
+  if (c.termination_distance != 0) {
+    if (absl::Status valid = ValidateTerminationDistance(c.termination_distance); !valid.ok()) {
+      return absl::InvalidArgumentError(absl::StrCat("--family_", valid.message()));
+    }
   }
   if (c.net_every < 1) return absl::InvalidArgumentError("--family_net_every: must be >= 1");
   return absl::OkStatus();
