@@ -7,16 +7,17 @@
 # on the tracker's own, and their per-part errors are tabulated (DIR/parts.md, DIR/parts.json).
 #
 #   bench/part_retraining_bench.sh --out DIR [--minutes 15] [--tracker data/policies/walk_small/policy.pt]
-#       [--parts R_Arm,L_Arm] [--new deepmimic_punch] [--old deepmimic_walk] [--eval_only]
+#       [--parts R_Arm,L_Arm] [--new deepmimic_punch] [--old deepmimic_walk] [--motions DIR] [--eval_only]
 #
 # Per part: the error of its bodies relative to the root (the part's own motion, without the
-# drift of the whole body), averaged over the steps each rollout tracked. --eval_only evaluates
-# the policies of an earlier run in DIR.
+# drift of the whole body), averaged over the steps each rollout tracked. --motions serves a library
+# of your own (e.g. the shipped clips plus one made by `modskill-motion splice`) to every server.
+# --eval_only evaluates the policies of an earlier run in DIR.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD="${MODSKILL_BUILD_DIR:-build}"
 OUT="" MINUTES=15 TRACKER=data/policies/walk_small/policy.pt PARTS=R_Arm,L_Arm NEW=deepmimic_punch OLD=deepmimic_walk
-EVAL_ONLY=""
+EVAL_ONLY="" MOTIONS_FLAG=""
 while (($#)); do
   case "$1" in
     --out) OUT="$2"; shift 2 ;;
@@ -25,21 +26,23 @@ while (($#)); do
     --parts) PARTS="$2"; shift 2 ;;
     --new) NEW="$2"; shift 2 ;;
     --old) OLD="$2"; shift 2 ;;
+    --motions) MOTIONS_FLAG="--motions $2"; shift 2 ;;
     --eval_only) EVAL_ONLY=1; shift ;;
-    -h|--help) sed -n 2,9p "$0"; exit 0 ;;
+    -h|--help) sed -n 2,10p "$0"; exit 0 ;;
     *) echo "error: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
 [ -n "$OUT" ] || { echo "error: --out DIR is required" >&2; exit 2; }
 mkdir -p "$OUT"
-[ -n "$EVAL_ONLY" ] || bench/learning_bench.sh --out "$OUT" --minutes "$MINUTES" --motions "$NEW" --server_flags "--no_generative" \
+[ -n "$EVAL_ONLY" ] || bench/learning_bench.sh --out "$OUT" --minutes "$MINUTES" --motions "$NEW" --server_flags "--no_generative $MOTIONS_FLAG" \
     parts="--init_from $TRACKER --train_parts $PARTS" \
     parts_controllers="--init_from $TRACKER --train_parts $PARTS --train_attention=false" \
     every_part="--init_from $TRACKER"
 
 source bench/side_by_side.sh  # free_port, stop_servers at exit
 port=$(free_port)
-"$BUILD/server/modskill-server" --port "$port" --threads 1 > "$OUT/eval_server.log" 2>&1 &
+# shellcheck disable=SC2086  # the flag and its directory are two words
+"$BUILD/server/modskill-server" --port "$port" --threads 1 $MOTIONS_FLAG > "$OUT/eval_server.log" 2>&1 &
 SERVERS+=($!)
 sleep 2
 for policy in tracker:"$TRACKER" parts:"$OUT/parts/policy.pt" parts_controllers:"$OUT/parts_controllers/policy.pt" \

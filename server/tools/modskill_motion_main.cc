@@ -1,9 +1,11 @@
-// modskill-motion: imports motion files into the native clip format, inspects clips and writes
-// them as one self-contained HTML page.
+// modskill-motion: imports motion files into the native clip format, inspects clips, writes
+// them as one self-contained HTML page, and splices one clip's parts onto another.
 //
 //   modskill-motion import IN... --out DIR [--labels CSV] [--fps 30]
 //   modskill-motion inspect FILE...
 //   modskill-motion view CLIP... --html OUT.html   (CLIP: a motion file or a library clip name)
+//   modskill-motion splice BASE SOURCE --parts R_Arm,L_Arm --name NAME --out DIR
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -15,7 +17,9 @@
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
 #include "absl/flags/usage.h"
+#include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "absl/strings/str_join.h"
 #include "absl/strings/str_split.h"
 #include "absl/strings/strip.h"
 #include "common/viewer/viewer_html.h"
@@ -23,14 +27,21 @@
 #include "server/core/motion/clip_view.h"
 #include "server/core/motion/motion_import.h"
 #include "server/core/motion/motion_library.h"
+#include "server/core/motion/motion_splice.h"
 #include "server/core/sim/humanoid_spec.h"
+#include "server/core/sim/part_layout.h"
 #include "server/core/util/confined_path.h"
 
-ABSL_FLAG(std::string, out, "", "import: directory the .msclip files are written to");
+ABSL_FLAG(std::string, out, "", "import, splice: directory the .msclip files are written to");
 ABSL_FLAG(std::string, labels, "", "import: CSV 'name,humanml3d_id,label' giving clips their captions");
 ABSL_FLAG(double, fps, 30.0, "import, view: rate the clips are resampled to (the control rate)");
 ABSL_FLAG(bool, ground, true, "import, view: shift each clip so that its lowest point touches the floor");
 ABSL_FLAG(std::string, html, "", "view: the HTML page written (written atomically: no partial file)");
+ABSL_FLAG(std::vector<std::string>, parts, {}, "splice: the parts (of --layout) whose motion comes from SOURCE");
+ABSL_FLAG(std::string, layout, "", "splice: the part layout naming --parts (default: data/part_layouts.json's)");
+ABSL_FLAG(std::string, timing, "stretch",
+          "splice: stretch (SOURCE's whole duration over BASE's) or clip (SOURCE at its own speed, held at its end)");
+ABSL_FLAG(std::string, name, "", "splice: the new clip's name (its file is DIR/NAME.msclip)");
 
 namespace modskill {
 namespace {
@@ -213,21 +224,86 @@ int View(const std::vector<std::string>& inputs, const HumanoidSpec& spec) {
   return 0;
 }
 
+// The bodies of the named parts of --layout, or an error naming the unknown part.
+absl::StatusOr<std::vector<int>> PartBodies(const HumanoidSpec& spec) {
+  absl::StatusOr<PartLayoutCatalog> catalog = PartLayoutCatalog::LoadDefault(spec);
+  if (!catalog.ok()) return catalog.status();
+  const std::string layout_name = absl::GetFlag(FLAGS_layout).empty() ? catalog->default_name()
+                                                                      : absl::GetFlag(FLAGS_layout);
+  absl::StatusOr<PartLayout> layout = catalog->Get(layout_name);
+  if (!layout.ok()) return absl::InvalidArgumentError(absl::StrCat("--layout: ", layout.status().message()));
+  std::vector<int> bodies;
+  for (const std::string& name : absl::GetFlag(FLAGS_parts)) {
+    auto part = std::find_if(layout->parts.begin(), layout->parts.end(),
+                             [&](const BodyPart& p) { return p.name == name; });
+    if (part == layout->parts.end()) {
+      return absl::InvalidArgumentError(absl::StrFormat("--parts: '%s' is not a part of layout '%s' (%s)", name,
+                                                        layout_name, absl::StrJoin(layout->PartNames(), ", ")));
+    }
+    bodies.insert(bodies.end(), part->bodies.begin(), part->bodies.end());
+  }
+  if (bodies.empty()) return absl::InvalidArgumentError("--parts: name at least one part");
+  return bodies;
+}
+
+int Splice(const std::vector<std::string>& inputs, const HumanoidSpec& spec) {
+  const std::string out_dir = absl::GetFlag(FLAGS_out);
+  if (inputs.size() != 2 || out_dir.empty() || absl::GetFlag(FLAGS_name).empty()) {
+    std::fprintf(stderr, "error: splice needs BASE SOURCE --parts P,... --name NAME --out DIR\n");
+    return 2;
+  }
+  SpliceRequest request;
+  request.name = absl::GetFlag(FLAGS_name);
+  absl::StatusOr<SpliceTiming> timing = ParseSpliceTiming(absl::GetFlag(FLAGS_timing));
+  absl::StatusOr<std::vector<int>> bodies = PartBodies(spec);
+  std::optional<MotionLibrary> library;
+  absl::StatusOr<MotionClip> base = ResolveClip(inputs[0], spec, &library);
+  absl::StatusOr<MotionClip> source = ResolveClip(inputs[1], spec, &library);
+  for (const absl::Status& status : {timing.status(), bodies.status(), base.status(), source.status()}) {
+    if (!status.ok()) {
+      std::fprintf(stderr, "error: %s\n", std::string(status.message()).c_str());
+      return 2;
+    }
+  }
+  request.timing = *timing;
+  request.source_bodies = *bodies;
+  absl::StatusOr<MotionClip> spliced = SpliceParts(spec, *base, *source, request);
+  if (!spliced.ok()) {
+    std::fprintf(stderr, "error: %s\n", std::string(spliced.status().message()).c_str());
+    return 1;
+  }
+  spliced->label = absl::StrFormat("%s, with the %s of %s", base->label.empty() ? base->name : base->label,
+                                   absl::StrJoin(absl::GetFlag(FLAGS_parts), ", "), source->name);
+  std::error_code error;
+  std::filesystem::create_directories(out_dir, error);
+  absl::StatusOr<std::string> path = ConfinedPath(out_dir, spliced->name + std::string(kClipFileExtension));
+  absl::Status written = path.ok() ? WriteClipFile(*path, *spliced) : path.status();
+  if (!written.ok()) {
+    std::fprintf(stderr, "error: --out %s: %s\n", out_dir.c_str(), std::string(written.message()).c_str());
+    return 1;
+  }
+  std::printf("%-28s %5d frames  %6.2f s  contact %5.1f%%  -> %s\n", spliced->name.c_str(), spliced->num_frames,
+              spliced->duration(), 100.0 * FootContactRatio(spec, *spliced), path->c_str());
+  return 0;
+}
+
 }  // namespace
 }  // namespace modskill
 
 int main(int argc, char** argv) {
   absl::SetProgramUsageMessage(
-      "imports, inspects and views motion clips.\n"
+      "imports, inspects, views and splices motion clips.\n"
       "  modskill-motion import IN... --out DIR [--labels CSV] [--fps 30]\n"
       "  modskill-motion inspect FILE...\n"
       "  modskill-motion view CLIP... --html OUT.html  (CLIP: a motion file or a library clip name)\n"
+      "  modskill-motion splice BASE SOURCE --parts R_Arm,L_Arm --name NAME --out DIR [--timing stretch|clip]\n"
       "Formats: AMASS/SMPL(-H) .npz, CMU .bvh, DeepMimic humanoid3d .txt, native .msclip");
   std::vector<char*> args = absl::ParseCommandLine(argc, argv);
   if (args.size() < 3) {
     std::fprintf(stderr,
                  "usage: modskill-motion import IN... --out DIR | modskill-motion inspect FILE... | "
-                 "modskill-motion view CLIP... --html OUT.html\n");
+                 "modskill-motion view CLIP... --html OUT.html | "
+                 "modskill-motion splice BASE SOURCE --parts P,... --name NAME --out DIR\n");
     return 2;
   }
   const std::string command = args[1];
@@ -240,6 +316,7 @@ int main(int argc, char** argv) {
   if (command == "import") return modskill::Import(files, *spec);
   if (command == "inspect") return modskill::Inspect(files, *spec);
   if (command == "view") return modskill::View(files, *spec);
-  std::fprintf(stderr, "error: unknown command '%s' (expected import, inspect or view)\n", command.c_str());
+  if (command == "splice") return modskill::Splice(files, *spec);
+  std::fprintf(stderr, "error: unknown command '%s' (expected import, inspect, view or splice)\n", command.c_str());
   return 2;
 }
