@@ -1,0 +1,30 @@
+#!/usr/bin/env bash
+# modskill-motion splice as a user runs it: the walk with the punch's arms written to a directory,
+# read back by inspect, and bad input refused with a message naming what is wrong and nothing
+# written.  Usage: run_motion_splice_cli_test.sh BUILD_DIR
+set -euo pipefail
+motion="$1/server/modskill-motion"
+out="$(mktemp -d)"
+trap 'rm -rf "$out"' EXIT
+fail() { echo "FAIL: $*" >&2; exit 1; }
+
+"$motion" splice deepmimic_walk deepmimic_punch --parts R_Arm,L_Arm --name walk_with_punch_arms --out "$out" \
+    > "$out/splice.txt"
+grep -q "walk_with_punch_arms .* 38 frames" "$out/splice.txt" || fail "splice output: $(cat "$out/splice.txt")"
+"$motion" inspect "$out/walk_with_punch_arms.msclip" > "$out/inspect.txt"
+grep -q "label .*with the R_Arm, L_Arm of deepmimic_punch" "$out/inspect.txt" || fail "label: $(cat "$out/inspect.txt")"
+grep -q "source .*deepmimic_walk .*deepmimic_punch" "$out/inspect.txt" || fail "source: $(cat "$out/inspect.txt")"
+
+expect_error() {  # expect_error PATTERN ARGS...: exit status != 0, PATTERN on stderr, no clip written
+  local pattern="$1"; shift
+  if "$motion" splice "$@" --out "$out/bad" 2> "$out/err.txt"; then fail "accepted: $*"; fi
+  grep -q -- "$pattern" "$out/err.txt" || fail "for '$*' expected '$pattern', got: $(cat "$out/err.txt")"
+  [ -z "$(ls -A "$out/bad" 2>/dev/null)" ] || fail "'$*' wrote $(ls "$out/bad")"
+}
+expect_error "'Head' is not a part of layout '5part'" deepmimic_walk deepmimic_punch --parts Head --name x
+expect_error "no clip of that name" deepmimic_walk no_such_clip --parts R_Arm --name x
+expect_error "splice name '../x'" deepmimic_walk deepmimic_punch --parts R_Arm --name ../x
+expect_error "timing 'loop'" deepmimic_walk deepmimic_punch --parts R_Arm --name x --timing loop
+expect_error "--layout" deepmimic_walk deepmimic_punch --parts R_Arm --name x --layout 9part
+expect_error "needs BASE SOURCE" deepmimic_walk --parts R_Arm --name x
+echo "modskill-motion splice: ok"
