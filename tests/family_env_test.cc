@@ -289,7 +289,7 @@ TEST(FamilyEnvTest, BodyProportionsScaleTheModelAndTheReference) {
   const HumanoidSpec& spec = base.spec();
   const int hip = spec.BodyIndex("L_Hip"), knee = spec.BodyIndex("L_Knee"), ankle = spec.BodyIndex("L_Ankle");
   const int shoulder = spec.BodyIndex("R_Shoulder"), elbow = spec.BodyIndex("R_Elbow"), pelvis = 0;
-  const MotionClip& original = DefaultMotions()->clip(DefaultMotions()->Find("deepmimic_walk"));
+  const MotionClip& original = ShippedClip("deepmimic_walk");
   const double thigh = (original.body_pos[knee] - original.body_pos[hip]).norm();
   const double upper_arm = (original.body_pos[elbow] - original.body_pos[shoulder]).norm();
   const int last = original.num_frames - 1;

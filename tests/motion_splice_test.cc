@@ -12,15 +12,6 @@
 namespace modskill {
 namespace {
 
-const MotionClip& ShippedClip(const std::string& name) {
-  const int id = DefaultMotions()->Find(name);
-  if (id < 0) {
-    ADD_FAILURE() << "no shipped clip " << name;
-    std::abort();
-  }
-  return DefaultMotions()->clip(id);
-}
-
 std::vector<int> ArmBodies() {
   auto catalog = PartLayoutCatalog::LoadDefault(DefaultSpec());
   EXPECT_TRUE(catalog.ok()) << catalog.status();

@@ -27,15 +27,6 @@ const PartLayout& FivePartLayout() {
   return *layout;
 }
 
-const MotionClip& ShippedClip(const std::string& name) {
-  const int id = DefaultMotions()->Find(name);
-  if (id < 0) {
-    ADD_FAILURE() << "no shipped clip " << name;
-    std::abort();
-  }
-  return DefaultMotions()->clip(id);
-}
-
 bool SameQuat(const Quat& a, const Quat& b) { return a.coeffs() == b.coeffs(); }
 
 std::vector<MotionVariant> Generate(const MotionClip& parent, const VariantOptions& options) {

@@ -2,7 +2,9 @@
 #ifndef MODSKILL_TESTS_TEST_FIXTURES_H_
 #define MODSKILL_TESTS_TEST_FIXTURES_H_
 
+#include <cstdlib>
 #include <memory>
+#include <string>
 
 #include <gtest/gtest.h>
 
@@ -35,6 +37,16 @@ inline std::shared_ptr<const MotionLibrary> DefaultMotions() {
     return std::make_shared<const MotionLibrary>(*std::move(loaded));
   }();
   return motions;
+}
+
+// A clip of the shipped library by name; a missing one fails the test at once.
+inline const MotionClip& ShippedClip(const std::string& name) {
+  const int id = DefaultMotions()->Find(name);
+  if (id < 0) {
+    ADD_FAILURE() << "no shipped clip " << name;
+    std::abort();
+  }
+  return DefaultMotions()->clip(id);
 }
 
 inline std::unique_ptr<EnvBatch> MakeBatch(EnvBatchConfig config,
