@@ -7,17 +7,19 @@
 # on the tracker's own, and their per-part errors are tabulated (DIR/parts.md, DIR/parts.json).
 #
 #   bench/part_retraining_bench.sh --out DIR [--minutes 15] [--tracker data/policies/walk_small/policy.pt]
-#       [--parts R_Arm,L_Arm] [--new deepmimic_punch] [--old deepmimic_walk] [--motions DIR] [--eval_only]
+#       [--parts R_Arm,L_Arm] [--new deepmimic_punch] [--old deepmimic_walk] [--motions DIR]
+#       [--learner_flags "FLAGS"] [--eval_only]
 #
 # Per part: the error of its bodies relative to the root (the part's own motion, without the
 # drift of the whole body), averaged over the steps each rollout tracked. --motions serves a library
-# of your own (e.g. the shipped clips plus one made by `modskill-motion splice`) to every server.
+# of your own (e.g. the shipped clips plus one made by `modskill-motion splice`) to every server;
+# --learner_flags go to every variant (e.g. "--termination_distance 0.5").
 # --eval_only evaluates the policies of an earlier run in DIR.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD="${MODSKILL_BUILD_DIR:-build}"
 OUT="" MINUTES=15 TRACKER=data/policies/walk_small/policy.pt PARTS=R_Arm,L_Arm NEW=deepmimic_punch OLD=deepmimic_walk
-EVAL_ONLY="" MOTIONS_FLAG=""
+EVAL_ONLY="" MOTIONS_FLAG="" LEARNER_FLAGS=""
 while (($#)); do
   case "$1" in
     --out) OUT="$2"; shift 2 ;;
@@ -27,17 +29,18 @@ while (($#)); do
     --new) NEW="$2"; shift 2 ;;
     --old) OLD="$2"; shift 2 ;;
     --motions) MOTIONS_FLAG="--motions $2"; shift 2 ;;
+    --learner_flags) LEARNER_FLAGS="$2"; shift 2 ;;
     --eval_only) EVAL_ONLY=1; shift ;;
-    -h|--help) sed -n 2,10p "$0"; exit 0 ;;
+    -h|--help) sed -n 2,16p "$0"; exit 0 ;;
     *) echo "error: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
 [ -n "$OUT" ] || { echo "error: --out DIR is required" >&2; exit 2; }
 mkdir -p "$OUT"
 [ -n "$EVAL_ONLY" ] || bench/learning_bench.sh --out "$OUT" --minutes "$MINUTES" --motions "$NEW" --server_flags "--no_generative $MOTIONS_FLAG" \
-    parts="--init_from $TRACKER --train_parts $PARTS" \
-    parts_controllers="--init_from $TRACKER --train_parts $PARTS --train_attention=false" \
-    every_part="--init_from $TRACKER"
+    parts="--init_from $TRACKER --train_parts $PARTS $LEARNER_FLAGS" \
+    parts_controllers="--init_from $TRACKER --train_parts $PARTS --train_attention=false $LEARNER_FLAGS" \
+    every_part="--init_from $TRACKER $LEARNER_FLAGS"
 
 source bench/side_by_side.sh  # free_port, stop_servers at exit
 port=$(free_port)

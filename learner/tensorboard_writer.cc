@@ -158,7 +158,7 @@ absl::Status AppendColumns(const std::string& path, const std::string& old_heade
 }  // namespace
 
 absl::StatusOr<std::unique_ptr<CsvLogger>> CsvLogger::Open(
-    const std::string& path, const std::vector<std::string>& columns) {
+    const std::string& path, const std::vector<std::string>& columns, Start start) {
   if (columns.empty()) {
     return absl::InvalidArgumentError(absl::StrCat("CSV log ", path, ": no columns"));
   }
@@ -174,7 +174,7 @@ absl::StatusOr<std::unique_ptr<CsvLogger>> CsvLogger::Open(
   bool write_header = true;
   bool needs_newline = false;
   std::error_code error;
-  if (std::filesystem::exists(path, error) && std::filesystem::file_size(path, error) > 0 &&
+  if (start == Start::kAppend && std::filesystem::exists(path, error) && std::filesystem::file_size(path, error) > 0 &&
       !error) {
     std::ifstream in(path, std::ios::binary);
     std::string first_line;
@@ -199,7 +199,7 @@ absl::StatusOr<std::unique_ptr<CsvLogger>> CsvLogger::Open(
     write_header = false;
   }
 
-  std::FILE* file = std::fopen(path.c_str(), "ab");
+  std::FILE* file = std::fopen(path.c_str(), start == Start::kFresh ? "wb" : "ab");
   if (file == nullptr) return IoError(absl::StrCat("open ", path));
   std::unique_ptr<CsvLogger> logger(new CsvLogger(path, file, columns.size()));
   std::string text = needs_newline ? "\n" : "";

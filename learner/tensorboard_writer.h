@@ -55,12 +55,16 @@ class TensorBoardWriter {
 // A CSV table with a fixed header, one row per Append, flushed after each row.
 class CsvLogger {
  public:
-  // A new (or empty) file gets the header `columns` joined by ','. An existing file whose
-  // first line is that same header is appended to (a resumed run); any other header is a
-  // FAILED_PRECONDITION naming the file and both headers. Column names may not contain
+  // kAppend continues a resumed run's file; kFresh starts a new run's, replacing any old rows
+  // (a fresh run in a used run directory must not draw its curve after the old run's).
+  enum class Start { kAppend, kFresh };
+  // A new (or empty) file gets the header `columns` joined by ','. With kAppend, an existing
+  // file whose first line is that same header is appended to (a resumed run); any other header
+  // is a FAILED_PRECONDITION naming the file and both headers. Column names may not contain
   // ',', '"' or newlines.
   static absl::StatusOr<std::unique_ptr<CsvLogger>> Open(const std::string& path,
-                                                         const std::vector<std::string>& columns);
+                                                         const std::vector<std::string>& columns,
+                                                         Start start = Start::kAppend);
   ~CsvLogger();
   CsvLogger(const CsvLogger&) = delete;
   CsvLogger& operator=(const CsvLogger&) = delete;

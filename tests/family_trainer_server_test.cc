@@ -83,6 +83,13 @@ TEST(FamilyTrainerTest, TrainsWritesAndResumes) {
   auto refused = FamilyTrainer::Create(other);
   EXPECT_EQ(refused.status().code(), absl::StatusCode::kFailedPrecondition);
   EXPECT_NE(refused.status().message().find("gravity=4:14"), std::string::npos) << refused.status();
+
+  // A fresh run in the used directory starts its own curve instead of drawing after the old one.
+  FamilyTrainerConfig fresh = config;
+  fresh.resume = false;
+  auto restarted = FamilyTrainer::Create(fresh);
+  ASSERT_TRUE(restarted.ok()) << restarted.status();
+  EXPECT_FALSE(std::filesystem::exists(run_dir + "/progress.csv"));
 }
 
 TEST(FamilyTrainerTest, PpoRatiosCompareTheInputsTheBehaviourPolicySaw) {

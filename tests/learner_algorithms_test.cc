@@ -555,6 +555,26 @@ TEST_F(CsvLoggerTest, HeaderAppendAndResume) {
   EXPECT_FALSE(CsvLogger::Open(path, {"a,b"}).ok());
 }
 
+TEST_F(CsvLoggerTest, FreshStartReplacesAnOldRunsRows) {
+  // Without --resume the learner starts a new run in a used run directory: its curve must not
+  // continue the old run's rows, whatever their header.
+  const std::string path = (dir_ / "progress.csv").string();
+  {
+    auto old_run = CsvLogger::Open(path, {"step", "loss"});
+    ASSERT_TRUE(old_run.ok()) << old_run.status();
+    ASSERT_TRUE((*old_run)->Append({1, 0.5}).ok());
+  }
+  {
+    auto fresh = CsvLogger::Open(path, {"step", "loss"}, CsvLogger::Start::kFresh);
+    ASSERT_TRUE(fresh.ok()) << fresh.status();
+    ASSERT_TRUE((*fresh)->Append({1, 0.25}).ok());
+  }
+  EXPECT_EQ(ReadFile(path), "step,loss\n1,0.25\n");
+  auto other_header = CsvLogger::Open(path, {"step", "kl"}, CsvLogger::Start::kFresh);
+  ASSERT_TRUE(other_header.ok()) << other_header.status();
+  EXPECT_EQ(ReadFile(path), "step,kl\n");
+}
+
 TEST_F(CsvLoggerTest, ResumeUnderMoreColumnsPadsTheOldRows) {
   // A run from an older version, resumed by one that logs more columns at the end.
   const std::string path = (dir_ / "progress.csv").string();

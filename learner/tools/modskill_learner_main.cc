@@ -522,7 +522,8 @@ int RunTraining(const std::string& token) {
   if ((*trainer)->writes_run_dir()) {  // data-parallel ranks other than 0 write nothing
     auto opened_events = TensorBoardWriter::Open(config->run_dir);
     if (!opened_events.ok()) return Fail(std::string(opened_events.status().message()));
-    auto opened_csv = CsvLogger::Open(config->run_dir + "/progress.csv", ProgressColumns(**trainer));
+    auto opened_csv = CsvLogger::Open(config->run_dir + "/progress.csv", ProgressColumns(**trainer),
+                                      config->resume ? CsvLogger::Start::kAppend : CsvLogger::Start::kFresh);
     if (!opened_csv.ok()) return Fail(std::string(opened_csv.status().message()));
     events = *std::move(opened_events);
     csv = *std::move(opened_csv);
