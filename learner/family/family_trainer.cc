@@ -69,15 +69,17 @@ absl::StatusOr<std::unique_ptr<FamilyTrainer>> FamilyTrainer::Create(FamilyTrain
   trainer->net_ = ParameterizationNet(ParameterizationNetConfig{trainer->space_->dims(), trainer->action_size_});
   trainer->net_optimizer_ = std::make_unique<torch::optim::Adam>(trainer->net_->parameters(), torch::optim::AdamOptions(1e-3));
   std::filesystem::create_directories(trainer->config_.run_dir);
-  // A fresh run in a used run directory starts its own coverage curve, not one after the old run's.
-  std::error_code error;
-  if (!trainer->config_.resume && (std::filesystem::remove(trainer->config_.run_dir + "/progress.csv", error), error)) {
-    return absl::InternalError(absl::StrCat(trainer->config_.run_dir, "/progress.csv: cannot replace: ", error.message()));
-  }
   if (trainer->config_.resume) {
     if (absl::Status status = trainer->LoadCheckpoint(); !status.ok()) return status;
     // The saved net was fitted to these elites' forerunners; one fit makes policy.pt's P(a) theirs.
     if (trainer->elites_->size() > 0) trainer->net_loss_ = trainer->FitNet();
+  } else {
+    // A fresh run in a used run directory starts its own coverage curve, not one after the old run's.
+    std::error_code error;
+    std::filesystem::remove(trainer->config_.run_dir + "/progress.csv", error);
+    if (error) {
+      return absl::InternalError(absl::StrCat(trainer->config_.run_dir, "/progress.csv: cannot replace: ", error.message()));
+    }
   }
   trainer->batch_ = trainer->curriculum_->SampleExploration(trainer->config_.curriculum.params_per_batch);
   trainer->AssignBatch();

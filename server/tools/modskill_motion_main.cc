@@ -267,13 +267,13 @@ int Splice(const std::vector<std::string>& inputs, const HumanoidSpec& spec) {
   }
   request.timing = *timing;
   request.source_bodies = *bodies;
+  request.label = absl::StrFormat("%s, with the %s of %s", base->label.empty() ? base->name : base->label,
+                                  absl::StrJoin(absl::GetFlag(FLAGS_parts), ", "), source->name);
   absl::StatusOr<MotionClip> spliced = SpliceParts(spec, *base, *source, request);
   if (!spliced.ok()) {
     std::fprintf(stderr, "error: %s\n", std::string(spliced.status().message()).c_str());
     return 1;
   }
-  spliced->label = absl::StrFormat("%s, with the %s of %s", base->label.empty() ? base->name : base->label,
-                                   absl::StrJoin(absl::GetFlag(FLAGS_parts), ", "), source->name);
   std::error_code error;
   std::filesystem::create_directories(out_dir, error);
   absl::StatusOr<std::string> path = ConfinedPath(out_dir, spliced->name + std::string(kClipFileExtension));

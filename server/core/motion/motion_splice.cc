@@ -62,10 +62,13 @@ absl::StatusOr<MotionClip> SpliceParts(const HumanoidSpec& spec, const MotionCli
   if (auto status = CheckInputs(spec, base, source, request); !status.ok()) return status;
   MotionClip out;
   out.name = request.name;
-  std::vector<std::string> body_names;
-  for (int body : request.source_bodies) body_names.push_back(spec.body(body).name);
-  out.label = absl::StrCat(base.label.empty() ? base.name : base.label, ", with ", absl::StrJoin(body_names, ", "),
-                           " from ", source.name);
+  out.label = request.label;
+  if (out.label.empty()) {
+    std::vector<std::string> body_names;
+    for (int body : request.source_bodies) body_names.push_back(spec.body(body).name);
+    out.label = absl::StrCat(base.label.empty() ? base.name : base.label, ", with ", absl::StrJoin(body_names, ", "),
+                             " from ", source.name);
+  }
   out.source = absl::StrCat("spliced: ", base.name, " (", base.source, ") with ", source.name, " (", source.source,
                             ")");
   out.fps = base.fps;

@@ -27,6 +27,7 @@ struct SpliceRequest {
   std::string name;                // the new clip's name (ValidateClipName)
   std::vector<int> source_bodies;  // spec body indices whose local rotations come from the source
   SpliceTiming timing = SpliceTiming::kStretch;
+  std::string label;  // the new clip's caption; empty: the base's, "with <bodies> from <source>"
 };
 
 // The base's root path and every other body's local rotation, frame for frame; each body in
