@@ -118,10 +118,11 @@ torch::Tensor ModSkillPolicyImpl::ControllerState(const torch::Tensor& normalize
 }
 
 torch::Tensor ModSkillPolicyImpl::LogProb(const torch::Tensor& mean, const torch::Tensor& log_std,
-                                          const torch::Tensor& actions) {
+                                          const torch::Tensor& actions, const torch::Tensor& sampled_dims) {
   static const double kHalfLog2Pi = 0.5 * std::log(2.0 * M_PI);
   const torch::Tensor scaled = (actions - mean) * torch::exp(-log_std);
-  return (-0.5 * scaled.square() - log_std - kHalfLog2Pi).sum(-1);
+  const torch::Tensor per_dim = -0.5 * scaled.square() - log_std - kHalfLog2Pi;
+  return (sampled_dims.defined() ? per_dim * sampled_dims : per_dim).sum(-1);
 }
 
 }  // namespace modskill::learner

@@ -61,8 +61,10 @@ class ModSkillPolicyImpl : public torch::nn::Module {
   bool proprioceptive() const { return config_.controller_input == ModelConfig::ControllerInput::kProprioception; }
 
   // Diagonal Gaussian log-density: mean, actions [..., A], log_std [A] (or broadcastable) -> [...],
-  // summed over the last dim.
-  static torch::Tensor LogProb(const torch::Tensor& mean, const torch::Tensor& log_std, const torch::Tensor& actions);
+  // summed over the last dim; with `sampled_dims` ([A], 1 or 0) over the dims marked 1 only (the
+  // others act on their mean and carry no probability).
+  static torch::Tensor LogProb(const torch::Tensor& mean, const torch::Tensor& log_std, const torch::Tensor& actions,
+                               const torch::Tensor& sampled_dims = {});
 
   const NetworkLayout& layout() const { return layout_; }
   const ModelConfig& config() const { return config_; }

@@ -50,7 +50,8 @@ PpoUpdateStats UpdateWithPpo(ModSkillPolicyImpl& policy, CriticImpl& critic, tor
       const torch::Tensor index = order.slice(0, step * minibatch, (step + 1) * minibatch);
       const torch::Tensor obs = batch.obs.index_select(0, index);
       const torch::Tensor new_log_prob =
-          ModSkillPolicyImpl::LogProb(policy.SampleMean(obs), log_std, batch.samples.index_select(0, index));
+          ModSkillPolicyImpl::LogProb(policy.SampleMean(obs), log_std, batch.samples.index_select(0, index),
+                                      settings.sampled_dims);
       PpoLossTerms loss = ComputePpoLoss(new_log_prob, batch.old_log_prob.index_select(0, index),
                                          batch.advantages.index_select(0, index), critic.forward(obs),
                                          batch.old_values.index_select(0, index), batch.returns.index_select(0, index),

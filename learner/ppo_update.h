@@ -24,6 +24,9 @@ struct PpoSettings {
   // Data-parallel learners: minibatch steps per epoch, the same on every rank (-1: as many as the
   // batch holds).
   int64_t minibatches_per_epoch = -1;
+  // [sample_size]: 1 where PPO samples, 0 where the policy acts on its mean (frozen parts, see
+  // TrainerConfig::frozen_parts_act_on_mean); undefined: every dim is sampled.
+  torch::Tensor sampled_dims;
 };
 
 // Data-parallel learners (data_parallel.h): called after every minibatch's backward pass (with

@@ -129,6 +129,7 @@ void ServerPool::MarkDead(SessionSlot* slot, const absl::Status& error) {
   // A fresh channel next time: a broken one waits out gRPC's own reconnect backoff first.
   slot->client.reset();
   slot->last_error = std::string(error.message());
+  slot->last_code = error.code();
   ++slot->failures;
   slot->retry_at = absl::Now() + slot->backoff;
   slot->backoff = std::min(slot->backoff * 2, options_.max_backoff);

@@ -44,6 +44,7 @@ struct SessionSlot {
   int failures = 0;
   int64_t generation = 0;  // incremented every time a new session opens on this slot
   std::string last_error;
+  absl::StatusCode last_code = absl::StatusCode::kOk;
   int num_envs() const { return stream ? stream->num_envs() : 0; }
 };
 

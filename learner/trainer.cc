@@ -120,6 +120,7 @@ ServerPoolOptions Trainer::PoolOptions() const {
   pool.session.set_termination_bodies(ToWire(TerminationBodiesOf(config)));
   pool.session.set_amp_obs(v1::FULL);
   pool.session.set_loop_clips(config.loop_clips);
+  for (const std::string& part : config.reward_parts) pool.session.add_reward_parts(part);
   if (!IsTrackingTask(config.task)) {
     pool.session.set_task(config.task);
     v1::TaskSettings* settings = pool.session.mutable_task_settings();
@@ -131,11 +132,33 @@ ServerPoolOptions Trainer::PoolOptions() const {
   return pool;
 }
 
+namespace {
+
+// A session config every server refuses (a bad field, an unknown clip or layout) will not be
+// accepted by waiting: that is the user's error, returned at once with the server's words.
+absl::Status RefusedEverywhere(const std::vector<std::unique_ptr<SessionSlot>>& slots) {
+  const SessionSlot* refused = nullptr;
+  for (const auto& slot : slots) {
+    if (slot->retired) continue;
+    const absl::StatusCode code = slot->last_code;
+    const bool refusal = code == absl::StatusCode::kInvalidArgument || code == absl::StatusCode::kNotFound ||
+                         code == absl::StatusCode::kFailedPrecondition;
+    if (slot->alive || slot->failures == 0 || !refusal) return absl::OkStatus();
+    refused = slot.get();
+  }
+  if (refused == nullptr) return absl::OkStatus();
+  return absl::Status(refused->last_code, absl::StrCat("every server refused the session; ", refused->server, ": ",
+                                                       refused->last_error));
+}
+
+}  // namespace
+
 absl::Status Trainer::WaitForServers() {
   const absl::Time start = absl::Now();
   bool announced = false;
   while (true) {
     if (servers_->Reconnect(static_cast<int64_t>(rank_seed()) + iteration_) > 0) return absl::OkStatus();
+    if (absl::Status refused = RefusedEverywhere(servers_->slots()); !refused.ok()) return refused;
     const absl::Duration waited = absl::Now() - start;
     if (waited > absl::Seconds(config_.server_timeout_s)) {
       std::string tried;
@@ -182,6 +205,15 @@ absl::Status Trainer::BuildNetworks(const v1::EnvSpec& spec) {
     if (!tracker.ok()) return tracker.status();
     policy_ = tracker->policy;
     obs_norm_ = tracker->obs_norm;
+    if (config_.frozen_parts_act_on_mean) {
+      // The frozen parts act as they do in evaluation, so their noise does not blur the
+      // retrained parts' returns; their dims then leave PPO's ratios.
+      sampled_dims_ = torch::zeros({layout_.action_size});
+      for (int p : tracker->trained_parts) {
+        sampled_dims_.slice(0, layout_.parts[p].action_start, layout_.parts[p].action_start + layout_.parts[p].action_size)
+            .fill_(1.f);
+      }
+    }
     LogLine("init from %s: %d of %d parts train%s", config_.init_from, static_cast<int>(tracker->trained_parts.size()),
             static_cast<int>(layout_.parts.size()),
             config_.train_parts.empty() ? "" : " (the others and the observation statistics are frozen)");

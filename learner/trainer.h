@@ -214,6 +214,9 @@ class Trainer {
   std::unordered_map<SessionSlot*, size_t> slot_index_;  // into episode_return_ / episode_length_
   torch::Generator generator_;         // minibatches and AMP draws (the update's thread)
   torch::Generator acting_generator_;  // action noise (the collection's thread)
+  // PpoSettings::sampled_dims: with --frozen_parts_act_on_mean, 1 over the retrained parts' actions
+  // and 0 over the frozen parts'; undefined otherwise (every action is sampled).
+  torch::Tensor sampled_dims_;
   int64_t policy_version_ = 0;         // policy updates so far
   ActingNetworks snapshot_;            // the weights a collection during the update acts with
   std::future<std::shared_ptr<Collection>> pending_;  // that collection

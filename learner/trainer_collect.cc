@@ -102,10 +102,12 @@ absl::Status Trainer::Act(SlotRollout& r, int t, const torch::Tensor& obs, Actin
   r.raw_obs.push_back(obs);
   const torch::Tensor mean = acting.policy->SampleMean(normalized);
   const torch::Tensor log_std = acting.policy->log_std();
-  const torch::Tensor sample = mean + log_std.exp() * torch::randn(mean.sizes(), acting_generator_);
+  torch::Tensor noise = log_std.exp() * torch::randn(mean.sizes(), acting_generator_);
+  if (sampled_dims_.defined()) noise *= sampled_dims_;
+  const torch::Tensor sample = mean + noise;
   r.obs[t].copy_(normalized);
   r.actions[t].copy_(sample);
-  r.log_prob[t].copy_(ModSkillPolicyImpl::LogProb(mean, log_std, sample));
+  r.log_prob[t].copy_(ModSkillPolicyImpl::LogProb(mean, log_std, sample, sampled_dims_));
   r.values[t].copy_(acting.critic->forward(normalized));
   const torch::Tensor contiguous = acting.policy->ActionsFor(normalized, sample).contiguous();
   return r.slot->stream->SendActions(contiguous.data_ptr<float>());

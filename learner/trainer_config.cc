@@ -25,11 +25,17 @@ absl::Status ValidateTask(const TrainerConfig& c) {
   if (!c.train_parts.empty() && c.init_from.empty()) {
     return absl::InvalidArgumentError("--train_parts: needs --init_from (the tracker whose other parts stay frozen)");
   }
+  if (c.frozen_parts_act_on_mean && c.train_parts.empty()) {
+    return absl::InvalidArgumentError("--frozen_parts_act_on_mean: only with --train_parts (no part is frozen otherwise)");
+  }
   if (!c.train_attention && c.train_parts.empty()) {
     return absl::InvalidArgumentError("--train_attention=false: only with --train_parts");
   }
   if (!c.init_from.empty() && !IsTrackingTask(c.task)) {
     return absl::InvalidArgumentError(absl::StrCat("--init_from: tracking only, not with --task ", c.task, " (use --skills)"));
+  }
+  if (!IsTrackingTask(c.task) && !c.reward_parts.empty()) {
+    return absl::InvalidArgumentError(absl::StrCat("--reward_parts: tracking only, not with --task ", c.task));
   }
   if (!IsTrackingTask(c.task) && c.loop_clips) {
     return absl::InvalidArgumentError(absl::StrCat("--loop_clips: tracking only, not with --task ", c.task));
@@ -204,7 +210,9 @@ std::string TrainerConfig::ToJson() const {
     json["init_from"] = init_from;
     json["train_parts"] = train_parts;
     json["train_attention"] = train_attention;
+    json["frozen_parts_act_on_mean"] = frozen_parts_act_on_mean;
   }
+  if (!reward_parts.empty()) json["reward_parts"] = reward_parts;
   if (!IsTrackingTask(task)) {
     json["skills"] = skills;
     json["task_hidden"] = model.task_hidden;

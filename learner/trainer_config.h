@@ -60,6 +60,12 @@ struct TrainerConfig {
   std::string init_from;
   std::vector<std::string> train_parts;
   bool train_attention = true;  // with train_parts: their attention maps train too
+  // SessionConfig.reward_parts: the imitation reward averages over these parts' bodies only (empty:
+  // every body), e.g. the retrained parts, whose signal the frozen parts' errors would drown.
+  std::vector<std::string> reward_parts;
+  // With train_parts: the frozen parts act on their means (no exploration noise, no share in PPO's
+  // ratios), as they will in evaluation.
+  bool frozen_parts_act_on_mean = false;
   // Tracking: clips loop (SessionConfig.loop_clips), so that episodes run 300 steps through the
   // clip's seams, as a task's looping base motion later asks of the skills.
   bool loop_clips = false;

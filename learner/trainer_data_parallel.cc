@@ -48,6 +48,8 @@ std::vector<SharedSetting> SharedSettings(const TrainerConfig& c) {
       {"termination_bodies", c.termination_bodies},
       {"termination_curriculum", absl::StrCat(Text(c.curriculum_start), ":", Text(c.curriculum_end))},
       {"loop_clips", Text(c.loop_clips)},
+      {"reward_parts", absl::StrJoin(c.reward_parts, ",")},
+      {"frozen_parts_act_on_mean", Text(c.frozen_parts_act_on_mean)},
       {"iterations", Text(c.iterations)},
       {"horizon", Text(c.horizon)},
       {"epochs", Text(c.epochs)},

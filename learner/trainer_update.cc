@@ -70,7 +70,7 @@ void Trainer::CenterOnCurrentPolicy(TrainingBatch* batch) {
   for (int64_t begin = 0; begin < size; begin += chunk) {
     const int64_t end = std::min(size, begin + chunk);
     proximal.push_back(ModSkillPolicyImpl::LogProb(policy_->SampleMean(batch->obs.slice(0, begin, end)), log_std,
-                                                   batch->actions.slice(0, begin, end)));
+                                                   batch->actions.slice(0, begin, end), sampled_dims_));
   }
   const torch::Tensor proximal_log_prob = torch::cat(proximal);
   batch->advantages = DecoupledAdvantages(batch->advantages, proximal_log_prob, batch->old_log_prob);
@@ -106,6 +106,7 @@ absl::Status Trainer::UpdatePolicy(const TrainingBatch& batch, IterationStats* s
   settings.value_clip = config_.value_clip;
   settings.value_coefficient = config_.value_coefficient;
   settings.max_grad_norm = config_.max_grad_norm;
+  settings.sampled_dims = sampled_dims_;
   if (data_parallel_) {  // every rank steps as often as the smallest batch allows
     const absl::StatusOr<double> steps =
         data_parallel_->AllReduceMin(MinibatchesPerEpoch(batch.obs.size(0), config_.minibatch_size));

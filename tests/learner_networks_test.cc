@@ -186,6 +186,14 @@ TEST(LearnerNetworksTest, LogProbOfTheMean) {
   torch::Tensor moved = mean.clone();
   moved.select(1, 0) += std::exp(-2.9);
   EXPECT_NEAR(ModSkillPolicyImpl::LogProb(mean, policy->log_std(), moved)[0].item<double>(), expected - 0.5, 1e-3);
+  // Dims marked 0 in sampled_dims act on their mean: they carry no probability, however far off.
+  torch::Tensor sampled = torch::ones({layout.action_size});
+  sampled[0] = 0.f;
+  const double one_less = -0.5 * (a - 1) * std::log(2 * M_PI) + 2.9 * (a - 1);
+  EXPECT_NEAR(ModSkillPolicyImpl::LogProb(mean, policy->log_std(), moved, sampled)[0].item<double>(), one_less, 1e-3);
+  moved.select(1, 1) += std::exp(-2.9);
+  EXPECT_NEAR(ModSkillPolicyImpl::LogProb(mean, policy->log_std(), moved, sampled)[0].item<double>(), one_less - 0.5,
+              1e-3);
 }
 
 // (5) torch::save -> torch::load into a fresh module reproduces the outputs.

@@ -114,6 +114,25 @@ TEST(PartRetrainingTest, ControllersAloneKeepEveryAttentionMap) {
   EXPECT_THAT(std::string(Trainer::Create(everything).status().message()), HasSubstr("--train_attention"));
 }
 
+// The arms rewarded for their own bodies and the frozen parts acting on their means: the arms
+// still train and everything else stays the tracker's.
+TEST(PartRetrainingTest, ArmsRewardedAndExploringAlone) {
+  auto server = StartTestServer();
+  TrainerConfig config = RetrainArms(*server, "arms_alone");
+  config.reward_parts = {"R_Arm", "L_Arm"};
+  config.frozen_parts_act_on_mean = true;
+  auto trainer = Trainer::Create(config);
+  ASSERT_TRUE(trainer.ok()) << trainer.status();
+  ASSERT_TRUE((*trainer)->Run().ok());
+  auto before = ReadExportedPolicy(kWalkTracker);
+  auto after = ReadExportedPolicy(config.run_dir + "/policy.pt");
+  ASSERT_TRUE(before.ok() && after.ok());
+  auto env = ConnectTo(*server)->Describe();
+  ASSERT_TRUE(env.ok());
+  ExpectUnchanged(*before, *after, *env, {"controller", "key", "query", "value"},
+                  [](const std::string& part) { return !IsArm(part); });
+}
+
 TEST(PartRetrainingTest, BadSettingsAreNamed) {
   auto server = StartTestServer();
   TrainerConfig unknown = RetrainArms(*server, "bad");
@@ -141,6 +160,22 @@ TEST(PartRetrainingTest, BadSettingsAreNamed) {
   auto needs = Trainer::Create(no_tracker);
   EXPECT_EQ(needs.status().code(), absl::StatusCode::kInvalidArgument);
   EXPECT_THAT(std::string(needs.status().message()), HasSubstr("--train_parts: needs --init_from"));
+
+  TrainerConfig on_mean = RetrainArms(*server, "bad");
+  on_mean.train_parts.clear();
+  on_mean.frozen_parts_act_on_mean = true;
+  EXPECT_THAT(std::string(Trainer::Create(on_mean).status().message()),
+              HasSubstr("--frozen_parts_act_on_mean: only with --train_parts"));
+
+  // An unknown reward part is the server's refusal, named, at once (not after --server_timeout_s).
+  TrainerConfig tail = RetrainArms(*server, "bad");
+  tail.reward_parts = {"Tail"};
+  const absl::Time start = absl::Now();
+  auto tail_trainer = Trainer::Create(tail);
+  ASSERT_FALSE(tail_trainer.ok());
+  EXPECT_EQ(tail_trainer.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(std::string(tail_trainer.status().message()), HasSubstr("reward_parts[0]: 'Tail'"));
+  EXPECT_LT(absl::Now() - start, absl::Seconds(tail.server_timeout_s / 2));
 }
 
 }  // namespace

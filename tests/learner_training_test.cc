@@ -222,6 +222,22 @@ TEST(LearnerTrainingTest, NoServerFailsWithAClearMessageAfterTheTimeout) {
   EXPECT_LT(absl::Now() - start, absl::Seconds(15));
 }
 
+// A session every server refuses (here an unknown clip) cannot be cured by waiting: the server's
+// message comes back at once, not after --server_timeout_s.
+TEST(LearnerTrainingTest, ASessionEveryServerRefusesFailsAtOnce) {
+  auto server = StartTestServer();
+  TrainerConfig config = SmallConfig({server->port()}, RunDir("refused"));
+  config.motions = {"deepmimic_walk", "no_such_clip"};
+  config.server_timeout_s = 60;
+  const absl::Time start = absl::Now();
+  auto trainer = Trainer::Create(config);
+  ASSERT_FALSE(trainer.ok());
+  EXPECT_NE(trainer.status().code(), absl::StatusCode::kUnavailable);
+  EXPECT_THAT(std::string(trainer.status().message()), HasSubstr("every server refused the session"));
+  EXPECT_THAT(std::string(trainer.status().message()), HasSubstr("no_such_clip"));
+  EXPECT_LT(absl::Now() - start, absl::Seconds(10));
+}
+
 TEST(LearnerTrainingTest, BadConfigurationsAreClearErrors) {
   TrainerConfig config = SmallConfig({1}, "");
   auto no_dir = Trainer::Create(config);

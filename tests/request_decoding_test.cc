@@ -2,6 +2,7 @@
 // a server: ParseSessionConfig (server/service/session_config_validation.h) and
 // PolicySpec::FromJson (policy_spec.h), the code fuzz/simulate_request_fuzzer and
 // fuzz/policy_spec_fuzzer run. The seed inputs of both fuzzers are checked here too.
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -93,6 +94,42 @@ TEST(SessionConfigTest, EveryBadFieldHasItsCode) {
   EXPECT_EQ(with([](auto& c) { c.set_termination_bodies(static_cast<v1::TerminationBodies>(3)); }),
             absl::StatusCode::kInvalidArgument);
   EXPECT_EQ(with([](auto& c) { c.set_amp_obs(static_cast<v1::AmpObs>(4)); }), absl::StatusCode::kInvalidArgument);
+}
+
+// reward_parts resolve to their parts' bodies; an unknown or repeated part, or a goal task, is
+// refused by name.
+TEST(SessionConfigTest, RewardPartsResolveToTheirBodies) {
+  v1::SessionConfig config;
+  config.set_num_envs(1);
+  auto settings = ParseSessionConfig(config, kMaxEnvs, kMaxLibraryClips, Layouts());
+  ASSERT_TRUE(settings.ok()) << settings.status();
+  EXPECT_TRUE(settings->env.reward.bodies.empty());  // every body
+
+  config.add_reward_parts("R_Arm");
+  config.add_reward_parts("L_Arm");
+  settings = ParseSessionConfig(config, kMaxEnvs, kMaxLibraryClips, Layouts());
+  ASSERT_TRUE(settings.ok()) << settings.status();
+  std::vector<int> expected;
+  for (const BodyPart& part : settings->layout.parts) {
+    if (part.name == "R_Arm" || part.name == "L_Arm") expected.insert(expected.end(), part.bodies.begin(), part.bodies.end());
+  }
+  std::sort(expected.begin(), expected.end());
+  ASSERT_FALSE(expected.empty());
+  EXPECT_EQ(settings->env.reward.bodies, expected);
+
+  const auto refusal = [&](auto change) {
+    v1::SessionConfig bad = config;
+    change(bad);
+    return ParseSessionConfig(bad, kMaxEnvs, kMaxLibraryClips, Layouts()).status();
+  };
+  absl::Status status = refusal([](auto& c) { c.set_reward_parts(1, "Tail"); });
+  EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(std::string(status.message()), ::testing::HasSubstr("reward_parts[1]: 'Tail'"));
+  status = refusal([](auto& c) { c.set_reward_parts(1, "R_Arm"); });
+  EXPECT_THAT(std::string(status.message()), ::testing::HasSubstr("reward_parts[1]: 'R_Arm' is given twice"));
+  status = refusal([](auto& c) { c.set_task("steer"); });
+  EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(std::string(status.message()), ::testing::HasSubstr("reward_parts: task steer"));
 }
 
 TEST(SessionConfigTest, SeedRequestsOfTheFuzzerDecode) {

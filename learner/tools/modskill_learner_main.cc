@@ -71,6 +71,12 @@ ABSL_FLAG(std::vector<std::string>, train_parts, {},
 ABSL_FLAG(bool, train_attention, true,
           "with --train_parts: their attention maps train too; false: their controllers alone, so every part's z "
           "stays the tracker's");
+ABSL_FLAG(bool, frozen_parts_act_on_mean, false,
+          "with --train_parts: the frozen parts act on their means (no exploration noise, no share in PPO's ratios), "
+          "as they will in evaluation");
+ABSL_FLAG(std::vector<std::string>, reward_parts, {},
+          "tracking: the imitation reward averages over these parts' bodies only (e.g. the --train_parts), so the "
+          "frozen parts' errors do not drown the retrained parts' signal (default: every body)");
 ABSL_FLAG(bool, loop_clips, false,
           "tracking: clips loop (on at frame 1, carried by their own displacement) and episodes run 300 steps, so "
           "the skills learn to go on as a task's looping base motion asks");
@@ -317,6 +323,8 @@ absl::Status TaskFromFlags(TrainerConfig* config) {
   config->loop_clips = absl::GetFlag(FLAGS_loop_clips);
   config->init_from = absl::GetFlag(FLAGS_init_from);
   config->train_parts = absl::GetFlag(FLAGS_train_parts);
+  config->reward_parts = absl::GetFlag(FLAGS_reward_parts);
+  config->frozen_parts_act_on_mean = absl::GetFlag(FLAGS_frozen_parts_act_on_mean);
   config->train_attention = absl::GetFlag(FLAGS_train_attention);
   if (const std::vector<std::string> hidden = absl::GetFlag(FLAGS_task_hidden); !hidden.empty()) {
     config->model.task_hidden.clear();

@@ -1,11 +1,15 @@
 #include "server/service/session_config_validation.h"
 
 #include "absl/status/status.h"
+#include <algorithm>
+
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_join.h"
 #include "common/wire/policy_enums.h"
 #include "server/core/env/env_batch.h"
 #include "server/core/env/env_spec.h"
 #include "server/core/env/family_episode.h"
+#include "server/core/env/task_catalog.h"
 
 namespace modskill {
 
@@ -74,6 +78,32 @@ absl::StatusOr<std::vector<ParamRange>> ToFamilyRanges(const v1::SessionConfig& 
   return ranges;
 }
 
+absl::StatusOr<std::vector<int>> ToRewardBodies(const google::protobuf::RepeatedPtrField<std::string>& reward_parts,
+                                                const PartLayout& layout, TaskKind task) {
+  std::vector<int> bodies;
+  if (reward_parts.empty()) return bodies;
+  if (IsGoalTask(task)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("reward_parts: task ", TaskInfoOf(task).name, " has no imitation reward to restrict"));
+  }
+  std::vector<bool> named(layout.parts.size(), false);
+  for (int i = 0; i < reward_parts.size(); ++i) {
+    int found = -1;
+    for (size_t p = 0; p < layout.parts.size(); ++p) {
+      if (layout.parts[p].name == reward_parts[i]) found = static_cast<int>(p);
+    }
+    if (found < 0) {
+      return absl::InvalidArgumentError(absl::StrCat("reward_parts[", i, "]: '", reward_parts[i], "' is not a part of the ",
+                                                     layout.name, " layout (", absl::StrJoin(layout.PartNames(), ", "), ")"));
+    }
+    if (named[found]) return absl::InvalidArgumentError(absl::StrCat("reward_parts[", i, "]: '", reward_parts[i], "' is given twice"));
+    named[found] = true;
+    bodies.insert(bodies.end(), layout.parts[found].bodies.begin(), layout.parts[found].bodies.end());
+  }
+  std::sort(bodies.begin(), bodies.end());
+  return bodies;
+}
+
 absl::StatusOr<SessionSettings> ParseSessionConfig(const v1::SessionConfig& config, int max_envs_per_session,
                                                    int max_library_clips, const PartLayoutCatalog& layouts) {
   SessionSettings settings;
@@ -110,6 +140,8 @@ absl::StatusOr<SessionSettings> ParseSessionConfig(const v1::SessionConfig& conf
   }
   auto family_ranges = ToFamilyRanges(config, action_mapping->mode, *task);
   if (!family_ranges.ok()) return family_ranges.status();
+  auto reward_bodies = ToRewardBodies(config.reward_parts(), *layout, *task);
+  if (!reward_bodies.ok()) return reward_bodies.status();
   settings.amp_frames = config.amp_obs() == v1::NEWEST ? 1 : config.amp_obs() == v1::OMIT ? 0 : kAmpHistory;
   if (config.motions_size() > max_library_clips) {
     return absl::InvalidArgumentError(absl::StrCat("motions: ", config.motions_size(),
@@ -129,6 +161,7 @@ absl::StatusOr<SessionSettings> ParseSessionConfig(const v1::SessionConfig& conf
   settings.env.task_settings = *task_settings;
   settings.env.loop_clips = config.loop_clips();
   settings.env.family = *std::move(family_ranges);
+  settings.env.reward.bodies = *std::move(reward_bodies);
   // A family leaves its clip by design (a higher jump, another gravity): a loose default.
   if (family && config.termination_distance() == 0 && *termination == TerminationMode::kTraining) {
     settings.env.termination_distance = kFamilyDefaultTerminationDistance;

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "absl/status/statusor.h"
 #include "modskill/v1/modskill.pb.h"
@@ -29,7 +30,7 @@ struct SessionSettings {
 // The checks in the order the service reports them: num_envs in [1, max_envs_per_session]
 // (above: RESOURCE_EXHAUSTED), max_episode_steps >= 0, the layout (NOT_FOUND), termination,
 // its distance, action mode and residual scale, termination bodies, amp_obs, the task and its
-// settings, no more motion names than max_library_clips (INVALID_ARGUMENT). The clip names themselves are left to the library.
+// settings, the family, reward_parts, no more motion names than max_library_clips (INVALID_ARGUMENT). The clip names themselves are left to the library.
 absl::StatusOr<SessionSettings> ParseSessionConfig(const v1::SessionConfig& config, int max_envs_per_session,
                                                    int max_library_clips, const PartLayoutCatalog& layouts);
 
@@ -47,6 +48,10 @@ absl::StatusOr<TaskSettings> ToTaskSettings(const v1::TaskSettings& wire);
 // field otherwise.
 absl::StatusOr<std::vector<ParamRange>> ToFamilyRanges(const v1::SessionConfig& config, ActionMode action_mode,
                                                        TaskKind task);
+// The bodies of the named parts of `layout`, sorted (empty for none: every body); INVALID_ARGUMENT
+// naming reward_parts[i] for an unknown or repeated part, or reward_parts for a goal task.
+absl::StatusOr<std::vector<int>> ToRewardBodies(const google::protobuf::RepeatedPtrField<std::string>& reward_parts,
+                                                const PartLayout& layout, TaskKind task);
 // residual_scale must be 0 outside RESIDUAL; 0 in RESIDUAL means the default scale.
 absl::StatusOr<ActionMapping> ToActionMapping(v1::ActionMode mode, float residual_scale);
 
