@@ -8,18 +8,23 @@
 #
 #   bench/part_retraining_bench.sh --out DIR [--minutes 15] [--tracker data/policies/walk_small/policy.pt]
 #       [--parts R_Arm,L_Arm] [--new deepmimic_punch] [--old deepmimic_walk] [--motions DIR]
-#       [--learner_flags "FLAGS"] [--eval_only]
+#       [--learner_flags "FLAGS"] [--eval_only] [--resume] [NAME="FLAGS" ...]
+#
+# NAME="FLAGS" arguments replace the three default variants (parts, parts_controllers, every_part)
+# with your own; each starts from --tracker with --learner_flags, e.g.
+#   arms_reward="--train_parts R_Arm,L_Arm --reward_parts R_Arm,L_Arm --frozen_parts_act_on_mean"
 #
 # Per part: the error of its bodies relative to the root (the part's own motion, without the
 # drift of the whole body), averaged over the steps each rollout tracked. --motions serves a library
 # of your own (e.g. the shipped clips plus one made by `modskill-motion splice`) to every server;
 # --learner_flags go to every variant (e.g. "--termination_distance 0.5").
-# --eval_only evaluates the policies of an earlier run in DIR.
+# --eval_only evaluates the policies of an earlier run in DIR; --resume continues its variants for
+# --minutes more (bench/learning_bench.sh --resume) before evaluating.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD="${MODSKILL_BUILD_DIR:-build}"
 OUT="" MINUTES=15 TRACKER=data/policies/walk_small/policy.pt PARTS=R_Arm,L_Arm NEW=deepmimic_punch OLD=deepmimic_walk
-EVAL_ONLY="" MOTIONS_FLAG="" LEARNER_FLAGS=""
+EVAL_ONLY="" RESUME="" MOTIONS_FLAG="" LEARNER_FLAGS="" VARIANT_ARGS=()
 while (($#)); do
   case "$1" in
     --out) OUT="$2"; shift 2 ;;
@@ -31,16 +36,24 @@ while (($#)); do
     --motions) MOTIONS_FLAG="--motions $2"; shift 2 ;;
     --learner_flags) LEARNER_FLAGS="$2"; shift 2 ;;
     --eval_only) EVAL_ONLY=1; shift ;;
-    -h|--help) sed -n 2,16p "$0"; exit 0 ;;
+    --resume) RESUME="--resume"; shift ;;
+    -h|--help) sed -n 2,23p "$0"; exit 0 ;;
+    [A-Za-z]*=*) VARIANT_ARGS+=("$1"); shift ;;
     *) echo "error: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
 [ -n "$OUT" ] || { echo "error: --out DIR is required" >&2; exit 2; }
 mkdir -p "$OUT"
-[ -n "$EVAL_ONLY" ] || bench/learning_bench.sh --out "$OUT" --minutes "$MINUTES" --motions "$NEW" --server_flags "--no_generative $MOTIONS_FLAG" \
-    parts="--init_from $TRACKER --train_parts $PARTS $LEARNER_FLAGS" \
-    parts_controllers="--init_from $TRACKER --train_parts $PARTS --train_attention=false $LEARNER_FLAGS" \
-    every_part="--init_from $TRACKER $LEARNER_FLAGS"
+if ((${#VARIANT_ARGS[@]} == 0)); then
+  VARIANT_ARGS=(parts="--train_parts $PARTS" parts_controllers="--train_parts $PARTS --train_attention=false" every_part="")
+fi
+RUNS=() VARIANT_NAMES=()
+for variant in "${VARIANT_ARGS[@]}"; do
+  VARIANT_NAMES+=("${variant%%=*}")
+  RUNS+=("${variant%%=*}=--init_from $TRACKER ${variant#*=} $LEARNER_FLAGS")
+done
+[ -n "$EVAL_ONLY" ] || bench/learning_bench.sh --out "$OUT" --minutes "$MINUTES" --motions "$NEW" \
+    --server_flags "--no_generative $MOTIONS_FLAG" $RESUME "${RUNS[@]}"
 
 source bench/side_by_side.sh  # free_port, stop_servers at exit
 port=$(free_port)
@@ -48,23 +61,22 @@ port=$(free_port)
 "$BUILD/server/modskill-server" --port "$port" --threads 1 $MOTIONS_FLAG > "$OUT/eval_server.log" 2>&1 &
 SERVERS+=($!)
 sleep 2
-for policy in tracker:"$TRACKER" parts:"$OUT/parts/policy.pt" parts_controllers:"$OUT/parts_controllers/policy.pt" \
-    every_part:"$OUT/every_part/policy.pt"; do
-  name="${policy%%:*}"
-  [ -f "${policy#*:}" ] || continue
-  "$BUILD/client/modskill-client" --server "127.0.0.1:$port" --timeout_s 30 rollout --checkpoint "${policy#*:}" \
+for name in tracker "${VARIANT_NAMES[@]}"; do
+  policy="$OUT/$name/policy.pt"
+  [ "$name" != tracker ] || policy="$TRACKER"
+  [ -f "$policy" ] || continue
+  "$BUILD/client/modskill-client" --server "127.0.0.1:$port" --timeout_s 30 rollout --checkpoint "$policy" \
       --clip "$NEW,$OLD" --frames --out "$OUT/rollout_$name.json" > /dev/null
 done
-PYTHONPATH=client/python /usr/bin/python3 - "$OUT" "$NEW" "$OLD" "$PARTS" "127.0.0.1:$port" <<'PY'
-import json, sys
+PYTHONPATH=client/python /usr/bin/python3 - "$OUT" "$NEW" "$OLD" "$PARTS" "127.0.0.1:$port" tracker "${VARIANT_NAMES[@]}" <<'PY'
+import json, os, sys
 import numpy as np
 import modskill
 out, new, old, parts, server = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4].split(",")[:], sys.argv[5]
 with modskill.Client(server) as client:
     spec = client.describe()
 rows = {}
-import os
-for name in ("tracker", "parts", "parts_controllers", "every_part"):
+for name in sys.argv[6:]:
     if not os.path.exists(f"{out}/rollout_{name}.json"):
         continue
     data = json.load(open(f"{out}/rollout_{name}.json"))
@@ -75,20 +87,27 @@ for name in ("tracker", "parts", "parts_controllers", "every_part"):
         ref = np.array([f["ref_body_pos"] for f in c["frames"]])
         local = np.linalg.norm((sim - sim[:, :1]) - (ref - ref[:, :1]), axis=-1)  # [T, bodies], m
         part_error = {p.name: 1000 * float(local[:, [index[b] for b in p.bodies]].mean()) for p in spec.parts}
+        retrained = [index[b] for p in spec.parts if p.name in parts for b in p.bodies]
+        frozen = [index[b] for p in spec.parts if p.name not in parts for b in p.bodies]
         rows[name][c["clip"]] = {"steps": c["steps"], "success": c["success"], "mpjpe_mm": c["mpjpe_mm"],
-                                 "part_error_mm": part_error}
+                                 "part_error_mm": part_error,
+                                 "retrained_error_mm": 1000 * float(local[:, retrained].mean()),
+                                 "frozen_error_mm": 1000 * float(local[:, frozen].mean())}
         c.pop("frames")
 part_names = [p.name for p in spec.parts]
 with open(f"{out}/parts.md", "w") as f:
-    head = "| policy | clip | steps | E_mpjpe (mm) | " + " | ".join(f"{p} (mm)" for p in part_names) + " |"
-    f.write(head + "\n|" + "---|" * (4 + len(part_names)) + "\n")
+    head = ("| policy | clip | steps | E_mpjpe (mm) | " + " | ".join(f"{p} (mm)" for p in part_names) +
+            " | retrained parts (mm) | frozen parts (mm) |")
+    f.write(head + "\n|" + "---|" * (6 + len(part_names)) + "\n")
     for name, by_clip in rows.items():
         for clip in (new, old):
             r = by_clip[clip]
             cells = " | ".join(f"{r['part_error_mm'][p]:.1f}" + (" *" if p in parts else "") for p in part_names)
-            f.write(f"| {name} | {clip} | {r['steps']}{' (all)' if r['success'] else ''} | {r['mpjpe_mm']:.1f} | {cells} |\n")
+            f.write(f"| {name} | {clip} | {r['steps']}{' (all)' if r['success'] else ''} | {r['mpjpe_mm']:.1f} | {cells} | "
+                    f"{r['retrained_error_mm']:.1f} | {r['frozen_error_mm']:.1f} |\n")
     f.write(f"\n(* the retrained parts, {', '.join(parts)}; a part's error: its bodies' positions relative to the "
-            "root against the reference's, averaged over its bodies and the steps tracked)\n")
+            "root against the reference's, averaged over its bodies and the steps tracked; the last two columns "
+            "average over all the retrained parts' bodies and over all the others')\n")
 json.dump(rows, open(f"{out}/parts.json", "w"), indent=1)
 print(open(f"{out}/parts.md").read())
 PY

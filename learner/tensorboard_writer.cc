@@ -201,7 +201,7 @@ absl::StatusOr<std::unique_ptr<CsvLogger>> CsvLogger::Open(
 
   std::FILE* file = std::fopen(path.c_str(), start == Start::kFresh ? "wb" : "ab");
   if (file == nullptr) return IoError(absl::StrCat("open ", path));
-  std::unique_ptr<CsvLogger> logger(new CsvLogger(path, file, columns.size()));
+  std::unique_ptr<CsvLogger> logger(new CsvLogger(path, file, columns));
   std::string text = needs_newline ? "\n" : "";
   if (write_header) absl::StrAppend(&text, header, "\n");
   if (!text.empty() &&
@@ -214,9 +214,9 @@ absl::StatusOr<std::unique_ptr<CsvLogger>> CsvLogger::Open(
 CsvLogger::~CsvLogger() { std::fclose(file_); }
 
 absl::Status CsvLogger::Append(const std::vector<double>& row) {
-  if (row.size() != num_columns_) {
+  if (row.size() != columns_.size()) {
     return absl::InvalidArgumentError(absl::StrCat("CSV log ", path_, ": row has ", row.size(),
-                                                   " values, header has ", num_columns_));
+                                                   " values, header has ", columns_.size()));
   }
   std::string line;
   char number[32];
@@ -225,7 +225,25 @@ absl::Status CsvLogger::Append(const std::vector<double>& row) {
     const auto result = std::to_chars(number, number + sizeof(number), row[i]);  // shortest
     line.append(number, result.ptr);
   }
-  line.push_back('\n');
+  return WriteLine(line);
+}
+
+absl::Status CsvLogger::AppendCells(const std::vector<std::string>& cells) {
+  if (cells.size() != columns_.size()) {
+    return absl::InvalidArgumentError(absl::StrCat("CSV log ", path_, ": row has ", cells.size(),
+                                                   " cells, header has ", columns_.size()));
+  }
+  for (size_t i = 0; i < cells.size(); ++i) {
+    if (cells[i].find_first_of(",\"\r\n") != std::string::npos) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("CSV log ", path_, ": column ", columns_[i], ": cell '", cells[i], "' holds a separator"));
+    }
+  }
+  return WriteLine(absl::StrJoin(cells, ","));
+}
+
+absl::Status CsvLogger::WriteLine(const std::string& row) {
+  const std::string line = row + "\n";
   if (std::fwrite(line.data(), 1, line.size(), file_) != line.size() || std::fflush(file_) != 0) {
     return IoError(absl::StrCat("write ", path_));
   }

@@ -71,16 +71,20 @@ class CsvLogger {
 
   // `row` must have one value per column; values are written in shortest round-trip form.
   absl::Status Append(const std::vector<double>& row);
+  // One row of cells formatted by the caller (text columns, fixed precision); a cell may not
+  // contain ',', '"' or a newline (INVALID_ARGUMENT naming the file and the column).
+  absl::Status AppendCells(const std::vector<std::string>& cells);
 
   const std::string& path() const { return path_; }
 
  private:
-  CsvLogger(std::string path, std::FILE* file, size_t num_columns)
-      : path_(std::move(path)), file_(file), num_columns_(num_columns) {}
+  CsvLogger(std::string path, std::FILE* file, std::vector<std::string> columns)
+      : path_(std::move(path)), file_(file), columns_(std::move(columns)) {}
+  absl::Status WriteLine(const std::string& line);
 
   std::string path_;
   std::FILE* file_;
-  size_t num_columns_;
+  std::vector<std::string> columns_;
 };
 
 }  // namespace modskill::learner

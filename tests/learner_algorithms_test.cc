@@ -575,6 +575,19 @@ TEST_F(CsvLoggerTest, FreshStartReplacesAnOldRunsRows) {
   EXPECT_EQ(ReadFile(path), "step,kl\n");
 }
 
+TEST_F(CsvLoggerTest, TextCellsAreWrittenAsGivenAndSeparatorsRefused) {
+  // The family trainer's rows carry its curriculum mode as text and its own precisions.
+  const std::string path = (dir_ / "progress.csv").string();
+  auto logger = CsvLogger::Open(path, {"iteration", "curriculum_mode", "coverage"});
+  ASSERT_TRUE(logger.ok()) << logger.status();
+  ASSERT_TRUE((*logger)->AppendCells({"1", "exploration", "0.2500"}).ok());
+  const absl::Status comma = (*logger)->AppendCells({"2", "a,b", "0.5"});
+  EXPECT_EQ(comma.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(std::string(comma.message()), ::testing::HasSubstr("curriculum_mode"));
+  EXPECT_FALSE((*logger)->AppendCells({"2", "refinement"}).ok()) << "one cell short";
+  EXPECT_EQ(ReadFile(path), "iteration,curriculum_mode,coverage\n1,exploration,0.2500\n");
+}
+
 TEST_F(CsvLoggerTest, ResumeUnderMoreColumnsPadsTheOldRows) {
   // A run from an older version, resumed by one that logs more columns at the end.
   const std::string path = (dir_ / "progress.csv").string();

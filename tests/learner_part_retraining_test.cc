@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <functional>
 #include <initializer_list>
+#include <optional>
 #include <string>
 
 #include <gmock/gmock.h>
@@ -57,22 +58,37 @@ void ExpectUnchanged(const ExportedPolicy& before, const ExportedPolicy& after, 
   }
 }
 
+// The tracker before and the policy `config` trained, and the server's spec, once the run has
+// ended and every part but the arms came out as the tracker's.
+struct ArmsRetrained {
+  ExportedPolicy before, after;
+  v1::EnvSpec env;
+};
+
+std::optional<ArmsRetrained> TrainOnlyTheArms(const RunningServer& server, const TrainerConfig& config) {
+  auto trainer = Trainer::Create(config);
+  EXPECT_TRUE(trainer.ok()) << trainer.status();
+  if (!trainer.ok() || !(*trainer)->Run().ok()) return std::nullopt;
+  auto before = ReadExportedPolicy(kWalkTracker);
+  auto after = ReadExportedPolicy(config.run_dir + "/policy.pt");
+  // 5part: L_Leg, R_Leg, Torso, L_Arm, R_Arm (the server's order).
+  auto env = ConnectTo(server)->Describe();
+  if (!before.ok() || !after.ok() || !env.ok()) return std::nullopt;
+  ExpectUnchanged(*before, *after, *env, {"controller", "key", "query", "value"},
+                  [](const std::string& part) { return !IsArm(part); });
+  return ArmsRetrained{*std::move(before), *std::move(after), *std::move(env)};
+}
+
 TEST(PartRetrainingTest, OnlyTheNamedPartsTrain) {
   auto server = StartTestServer();
   TrainerConfig config = RetrainArms(*server, "arms");
-  auto trainer = Trainer::Create(config);
-  ASSERT_TRUE(trainer.ok()) << trainer.status();
-  ASSERT_TRUE((*trainer)->Run().ok());
-  auto before = ReadExportedPolicy(kWalkTracker);
-  auto after = ReadExportedPolicy(config.run_dir + "/policy.pt");
-  ASSERT_TRUE(before.ok() && after.ok());
-  // 5part: L_Leg, R_Leg, Torso, L_Arm, R_Arm (the server's order).
-  auto env = ConnectTo(*server)->Describe();
-  ASSERT_TRUE(env.ok());
-  ExpectUnchanged(*before, *after, *env, {"controller", "key", "query", "value"},
-                  [](const std::string& part) { return !IsArm(part); });
-  EXPECT_TRUE(torch::equal(before->tensors.at("obs_mean"), after->tensors.at("obs_mean")));
-  EXPECT_TRUE(torch::equal(before->tensors.at("obs_var"), after->tensors.at("obs_var")));
+  std::optional<ArmsRetrained> run = TrainOnlyTheArms(*server, config);
+  ASSERT_TRUE(run.has_value());
+  const ExportedPolicy& before = run->before;
+  const ExportedPolicy& after = run->after;
+  const v1::EnvSpec& env = run->env;
+  EXPECT_TRUE(torch::equal(before.tensors.at("obs_mean"), after.tensors.at("obs_mean")));
+  EXPECT_TRUE(torch::equal(before.tensors.at("obs_var"), after.tensors.at("obs_var")));
 
   // Resumed, the frozen parts stay frozen.
   config.resume = true;
@@ -82,12 +98,12 @@ TEST(PartRetrainingTest, OnlyTheNamedPartsTrain) {
   ASSERT_TRUE((*resumed)->Run().ok());
   auto again = ReadExportedPolicy(config.run_dir + "/policy.pt");
   ASSERT_TRUE(again.ok());
-  for (int p = 0; p < env->parts_size(); ++p) {
+  for (int p = 0; p < env.parts_size(); ++p) {
     const std::string prefix = absl::StrCat("part", p, "_controller");
-    if (env->parts(p).name() == "R_Arm") {
-      EXPECT_FALSE(SameTensors(*after, *again, prefix));
-    } else if (env->parts(p).name() != "L_Arm") {
-      EXPECT_TRUE(SameTensors(*before, *again, prefix));
+    if (env.parts(p).name() == "R_Arm") {
+      EXPECT_FALSE(SameTensors(after, *again, prefix));
+    } else if (env.parts(p).name() != "L_Arm") {
+      EXPECT_TRUE(SameTensors(before, *again, prefix));
     }
   }
 }
@@ -121,16 +137,7 @@ TEST(PartRetrainingTest, ArmsRewardedAndExploringAlone) {
   TrainerConfig config = RetrainArms(*server, "arms_alone");
   config.reward_parts = {"R_Arm", "L_Arm"};
   config.frozen_parts_act_on_mean = true;
-  auto trainer = Trainer::Create(config);
-  ASSERT_TRUE(trainer.ok()) << trainer.status();
-  ASSERT_TRUE((*trainer)->Run().ok());
-  auto before = ReadExportedPolicy(kWalkTracker);
-  auto after = ReadExportedPolicy(config.run_dir + "/policy.pt");
-  ASSERT_TRUE(before.ok() && after.ok());
-  auto env = ConnectTo(*server)->Describe();
-  ASSERT_TRUE(env.ok());
-  ExpectUnchanged(*before, *after, *env, {"controller", "key", "query", "value"},
-                  [](const std::string& part) { return !IsArm(part); });
+  EXPECT_TRUE(TrainOnlyTheArms(*server, config).has_value());
 }
 
 TEST(PartRetrainingTest, BadSettingsAreNamed) {

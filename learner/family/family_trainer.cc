@@ -73,14 +73,12 @@ absl::StatusOr<std::unique_ptr<FamilyTrainer>> FamilyTrainer::Create(FamilyTrain
     if (absl::Status status = trainer->LoadCheckpoint(); !status.ok()) return status;
     // The saved net was fitted to these elites' forerunners; one fit makes policy.pt's P(a) theirs.
     if (trainer->elites_->size() > 0) trainer->net_loss_ = trainer->FitNet();
-  } else {
-    // A fresh run in a used run directory starts its own coverage curve, not one after the old run's.
-    std::error_code error;
-    std::filesystem::remove(trainer->config_.run_dir + "/progress.csv", error);
-    if (error) {
-      return absl::InternalError(absl::StrCat(trainer->config_.run_dir, "/progress.csv: cannot replace: ", error.message()));
-    }
   }
+  // A fresh run in a used run directory starts its own coverage curve, not one after the old run's.
+  auto progress = CsvLogger::Open(trainer->config_.run_dir + "/progress.csv", FamilyProgressColumns(),
+                                  trainer->config_.resume ? CsvLogger::Start::kAppend : CsvLogger::Start::kFresh);
+  if (!progress.ok()) return progress.status();
+  trainer->progress_ = *std::move(progress);
   trainer->batch_ = trainer->curriculum_->SampleExploration(trainer->config_.curriculum.params_per_batch);
   trainer->AssignBatch();
   return trainer;

@@ -33,6 +33,7 @@
 #include "learner/family/parameter_curriculum.h"
 #include "learner/family/parameterization_net.h"
 #include "learner/kl_adaptive_learning_rate.h"
+#include "learner/tensorboard_writer.h"
 
 namespace modskill::learner::family {
 
@@ -81,6 +82,9 @@ struct FamilyIterationStats {
   double learning_rate = 0;  // at the iteration's end
   double action_std = 0;     // the policy's exploration noise, exp(log_std) averaged over the actions
 };
+
+// progress.csv's header: FamilyIterationStats' fields in this order.
+const std::vector<std::string>& FamilyProgressColumns();
 
 // One evaluated episode at fixed parameters (FamilyTrainer::Evaluate).
 struct FamilyRolloutResult {
@@ -153,9 +157,10 @@ class FamilyTrainer {
   absl::Status SaveCheckpoint() const;
   absl::Status ExportPolicyFile();  // run_dir/policy.pt
   absl::Status LoadCheckpoint();
-  absl::Status AppendProgress(const FamilyIterationStats& stats) const;
+  absl::Status AppendProgress(const FamilyIterationStats& stats);
 
   FamilyTrainerConfig config_;
+  std::unique_ptr<CsvLogger> progress_;  // run_dir/progress.csv, a row per iteration
   std::unique_ptr<SimulationClient> client_;
   std::unique_ptr<SimulationStream> stream_;
   std::unique_ptr<ParamSpace> space_;

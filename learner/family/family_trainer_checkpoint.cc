@@ -135,19 +135,22 @@ absl::Status FamilyTrainer::LoadCheckpoint() {
   return absl::OkStatus();
 }
 
-absl::Status FamilyTrainer::AppendProgress(const FamilyIterationStats& s) const {
-  const std::string path = config_.run_dir + "/progress.csv";
-  const bool fresh = !std::filesystem::exists(path);
-  std::ofstream out(path, std::ios::app);
-  if (fresh) {
-    out << "iteration,env_steps,wall_s,episodes,mean_return,mean_length,mean_fitness,elites,coverage,"
-           "curriculum_mode,exploration_rate,net_loss,approx_kl,learning_rate,action_std\n";
-  }
-  out << absl::StrFormat("%d,%d,%.1f,%d,%.4f,%.2f,%.4f,%d,%.4f,%s,%.4f,%.6f,%.6f,%.3g,%.4f\n", s.iteration, s.env_steps,
-                         s.wall_s, s.episodes, s.mean_return, s.mean_length, s.mean_fitness, s.elites, s.coverage,
-                         s.mode, s.exploration_rate, s.net_loss, s.approx_kl, s.learning_rate, s.action_std);
-  if (!out) return absl::InternalError(absl::StrCat(path, ": cannot append"));
-  return absl::OkStatus();
+const std::vector<std::string>& FamilyProgressColumns() {
+  static const std::vector<std::string> columns = {
+      "iteration", "env_steps", "wall_s",    "episodes",        "mean_return",      "mean_length",
+      "mean_fitness", "elites",  "coverage", "curriculum_mode", "exploration_rate", "net_loss",
+      "approx_kl", "learning_rate", "action_std"};
+  return columns;
+}
+
+absl::Status FamilyTrainer::AppendProgress(const FamilyIterationStats& s) {
+  return progress_->AppendCells({absl::StrCat(s.iteration), absl::StrCat(s.env_steps), absl::StrFormat("%.1f", s.wall_s),
+                                 absl::StrCat(s.episodes), absl::StrFormat("%.4f", s.mean_return),
+                                 absl::StrFormat("%.2f", s.mean_length), absl::StrFormat("%.4f", s.mean_fitness),
+                                 absl::StrCat(s.elites), absl::StrFormat("%.4f", s.coverage), s.mode,
+                                 absl::StrFormat("%.4f", s.exploration_rate), absl::StrFormat("%.6f", s.net_loss),
+                                 absl::StrFormat("%.6f", s.approx_kl), absl::StrFormat("%.3g", s.learning_rate),
+                                 absl::StrFormat("%.4f", s.action_std)});
 }
 
 }  // namespace modskill::learner::family

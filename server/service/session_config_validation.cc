@@ -1,8 +1,8 @@
 #include "server/service/session_config_validation.h"
 
-#include "absl/status/status.h"
 #include <algorithm>
 
+#include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
 #include "common/wire/policy_enums.h"

@@ -315,6 +315,21 @@ class ClientTest(unittest.TestCase):
         self.assertEqual(caught.exception.code, grpc.StatusCode.FAILED_PRECONDITION)
         self.assertIn("action_mode", caught.exception.message)
 
+    def test_reward_parts(self):
+        # The same seed and actions: the arms' reward differs from the whole body's, the errors do not.
+        actions = np.random.default_rng(3).uniform(-1, 1, (4, 69)).astype(np.float32)
+        kwargs = dict(motions=["deepmimic_walk"], seed=9, termination="none", action_mode="residual")
+        with self.client.session(4, **kwargs) as whole, \
+                self.client.session(4, reward_parts=["R_Arm", "L_Arm"], **kwargs) as arms:
+            for _ in range(3):
+                a, b = whole.step(actions), arms.step(actions)
+            np.testing.assert_allclose(a.mean_body_error, b.mean_body_error)
+            self.assertFalse(np.allclose(a.reward, b.reward))
+        with self.assertRaises(modskill.ServerError) as caught:
+            self.client.session(1, reward_parts=["R_Arm", "Tail"])
+        self.assertEqual(caught.exception.code, grpc.StatusCode.INVALID_ARGUMENT)
+        self.assertIn("reward_parts[1]: 'Tail'", caught.exception.message)
+
     def test_wrong_actions_raise_value_error(self):
         with self.client.session(2) as session:
             with self.assertRaises(ValueError) as caught:

@@ -378,7 +378,8 @@ class Client:
                 action_mode: Optional[Union[str, int]] = None, residual_scale: float = 0.0,
                 termination_bodies: Union[str, int] = "all", task: str = "",
                 task_settings: Optional[Mapping[str, float]] = None, loop_clips: bool = False,
-                family: Optional[Mapping[str, Union[float, Tuple[float, float]]]] = None) -> "Session":
+                family: Optional[Mapping[str, Union[float, Tuple[float, float]]]] = None,
+                reward_parts: Sequence[str] = ()) -> "Session":
         """Opens a simulation session of ``num_envs`` envs and returns it once the server has
         reset them (``Session.initial`` holds the first observations).
 
@@ -408,6 +409,9 @@ class Client:
             constraint); ``describe().family_parameters`` lists them. Actions are residual
             displacements plus a time warp at ``spec.time_warp_action``; ``step(family_params=)``
             picks each env's next parameters.
+          reward_parts: parts of the layout (e.g. ["R_Arm", "L_Arm"]) whose bodies alone the
+            imitation reward averages over, for a part retrained alone; empty: every body.
+            Termination and the errors still use every body.
 
         Use it as a context manager (or call ``close()``) so that the server frees the envs.
         """
@@ -425,7 +429,8 @@ class Client:
                                   termination_bodies=_enum(termination_bodies, _TERMINATION_BODIES,
                                                            "termination_bodies"),
                                   task=task, task_settings=pb.TaskSettings(**dict(task_settings or {})),
-                                  loop_clips=bool(loop_clips), family=_family_config(family))
+                                  loop_clips=bool(loop_clips), family=_family_config(family),
+                                  reward_parts=[reward_parts] if isinstance(reward_parts, str) else list(reward_parts))
         session = Session(self, config)
         self._sessions.add(session)
         return session
