@@ -119,6 +119,21 @@ int ServerPool::Reconnect(int64_t seed) {
   return static_cast<int>(Alive().size());
 }
 
+absl::Status ServerPool::RefusedEverywhere() const {
+  const SessionSlot* refused = nullptr;
+  for (const auto& slot : slots_) {
+    if (slot->retired) continue;
+    const absl::StatusCode code = slot->last_code;
+    const bool refusal = code == absl::StatusCode::kInvalidArgument || code == absl::StatusCode::kNotFound ||
+                         code == absl::StatusCode::kFailedPrecondition;
+    if (slot->alive || slot->failures == 0 || !refusal) return absl::OkStatus();
+    refused = slot.get();
+  }
+  if (refused == nullptr) return absl::OkStatus();
+  return absl::Status(refused->last_code, absl::StrCat("every server refused the session; ", refused->server, ": ",
+                                                       refused->last_error));
+}
+
 void ServerPool::MarkDead(SessionSlot* slot, const absl::Status& error) {
   if (slot->alive || slot->failures == 0) {
     LogLine("server %s: session %d lost: %s (retrying with backoff)", slot->server, slot->index_on_server,

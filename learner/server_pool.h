@@ -56,6 +56,10 @@ class ServerPool {
   // Refreshes the membership, then opens every session that is due for a (re)try; returns how many
   // are alive. Call it only while no collection uses the slots (between iterations).
   int Reconnect(int64_t seed);
+  // No session open and every server tried refused the session config itself (INVALID_ARGUMENT,
+  // NOT_FOUND, FAILED_PRECONDITION: a bad field, an unknown clip or layout): that refusal, which
+  // waiting will not cure; OK otherwise (a server down is still worth waiting for).
+  absl::Status RefusedEverywhere() const;
   // Marks a slot dead after an error and schedules its retry.
   void MarkDead(SessionSlot* slot, const absl::Status& error);
   std::vector<SessionSlot*> Alive();

@@ -80,7 +80,7 @@ class CsvLogger {
  private:
   CsvLogger(std::string path, std::FILE* file, std::vector<std::string> columns)
       : path_(std::move(path)), file_(file), columns_(std::move(columns)) {}
-  absl::Status WriteLine(const std::string& line);
+  absl::Status WriteLine(const std::string& row);  // appends the newline
 
   std::string path_;
   std::FILE* file_;

@@ -132,33 +132,12 @@ ServerPoolOptions Trainer::PoolOptions() const {
   return pool;
 }
 
-namespace {
-
-// A session config every server refuses (a bad field, an unknown clip or layout) will not be
-// accepted by waiting: that is the user's error, returned at once with the server's words.
-absl::Status RefusedEverywhere(const std::vector<std::unique_ptr<SessionSlot>>& slots) {
-  const SessionSlot* refused = nullptr;
-  for (const auto& slot : slots) {
-    if (slot->retired) continue;
-    const absl::StatusCode code = slot->last_code;
-    const bool refusal = code == absl::StatusCode::kInvalidArgument || code == absl::StatusCode::kNotFound ||
-                         code == absl::StatusCode::kFailedPrecondition;
-    if (slot->alive || slot->failures == 0 || !refusal) return absl::OkStatus();
-    refused = slot.get();
-  }
-  if (refused == nullptr) return absl::OkStatus();
-  return absl::Status(refused->last_code, absl::StrCat("every server refused the session; ", refused->server, ": ",
-                                                       refused->last_error));
-}
-
-}  // namespace
-
 absl::Status Trainer::WaitForServers() {
   const absl::Time start = absl::Now();
   bool announced = false;
   while (true) {
     if (servers_->Reconnect(static_cast<int64_t>(rank_seed()) + iteration_) > 0) return absl::OkStatus();
-    if (absl::Status refused = RefusedEverywhere(servers_->slots()); !refused.ok()) return refused;
+    if (absl::Status refused = servers_->RefusedEverywhere(); !refused.ok()) return refused;
     const absl::Duration waited = absl::Now() - start;
     if (waited > absl::Seconds(config_.server_timeout_s)) {
       std::string tried;

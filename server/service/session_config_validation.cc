@@ -4,7 +4,6 @@
 
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
-#include "absl/strings/str_join.h"
 #include "common/wire/policy_enums.h"
 #include "server/core/env/env_batch.h"
 #include "server/core/env/env_spec.h"
@@ -80,27 +79,14 @@ absl::StatusOr<std::vector<ParamRange>> ToFamilyRanges(const v1::SessionConfig& 
 
 absl::StatusOr<std::vector<int>> ToRewardBodies(const google::protobuf::RepeatedPtrField<std::string>& reward_parts,
                                                 const PartLayout& layout, TaskKind task) {
-  std::vector<int> bodies;
-  if (reward_parts.empty()) return bodies;
+  if (reward_parts.empty()) return std::vector<int>();
   if (IsGoalTask(task)) {
     return absl::InvalidArgumentError(
         absl::StrCat("reward_parts: task ", TaskInfoOf(task).name, " has no imitation reward to restrict"));
   }
-  std::vector<bool> named(layout.parts.size(), false);
-  for (int i = 0; i < reward_parts.size(); ++i) {
-    int found = -1;
-    for (size_t p = 0; p < layout.parts.size(); ++p) {
-      if (layout.parts[p].name == reward_parts[i]) found = static_cast<int>(p);
-    }
-    if (found < 0) {
-      return absl::InvalidArgumentError(absl::StrCat("reward_parts[", i, "]: '", reward_parts[i], "' is not a part of the ",
-                                                     layout.name, " layout (", absl::StrJoin(layout.PartNames(), ", "), ")"));
-    }
-    if (named[found]) return absl::InvalidArgumentError(absl::StrCat("reward_parts[", i, "]: '", reward_parts[i], "' is given twice"));
-    named[found] = true;
-    bodies.insert(bodies.end(), layout.parts[found].bodies.begin(), layout.parts[found].bodies.end());
-  }
-  std::sort(bodies.begin(), bodies.end());
+  auto bodies = layout.BodiesOfParts({reward_parts.begin(), reward_parts.end()}, "reward_parts");
+  if (!bodies.ok()) return bodies.status();
+  std::sort(bodies->begin(), bodies->end());  // ImitationRewardConfig::bodies is sorted
   return bodies;
 }
 

@@ -232,17 +232,9 @@ absl::StatusOr<std::vector<int>> PartBodies(const HumanoidSpec& spec) {
                                                                       : absl::GetFlag(FLAGS_layout);
   absl::StatusOr<PartLayout> layout = catalog->Get(layout_name);
   if (!layout.ok()) return absl::InvalidArgumentError(absl::StrCat("--layout: ", layout.status().message()));
-  std::vector<int> bodies;
-  for (const std::string& name : absl::GetFlag(FLAGS_parts)) {
-    auto part = std::find_if(layout->parts.begin(), layout->parts.end(),
-                             [&](const BodyPart& p) { return p.name == name; });
-    if (part == layout->parts.end()) {
-      return absl::InvalidArgumentError(absl::StrFormat("--parts: '%s' is not a part of layout '%s' (%s)", name,
-                                                        layout_name, absl::StrJoin(layout->PartNames(), ", ")));
-    }
-    bodies.insert(bodies.end(), part->bodies.begin(), part->bodies.end());
-  }
-  if (bodies.empty()) return absl::InvalidArgumentError("--parts: name at least one part");
+  absl::StatusOr<std::vector<int>> bodies = layout->BodiesOfParts(absl::GetFlag(FLAGS_parts), "--parts");
+  if (!bodies.ok()) return bodies.status();
+  if (bodies->empty()) return absl::InvalidArgumentError("--parts: name at least one part");
   return bodies;
 }
 

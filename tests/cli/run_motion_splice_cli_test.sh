@@ -22,6 +22,7 @@ expect_error() {  # expect_error PATTERN ARGS...: exit status != 0, PATTERN on s
   [ -z "$(ls -A "$out/bad" 2>/dev/null)" ] || fail "'$*' wrote $(ls "$out/bad")"
 }
 expect_error "'Head' is not a part of layout '5part'" deepmimic_walk deepmimic_punch --parts Head --name x
+expect_error "--parts.1.: 'R_Arm' is given twice" deepmimic_walk deepmimic_punch --parts R_Arm,R_Arm --name x
 expect_error "no clip of that name" deepmimic_walk no_such_clip --parts R_Arm --name x
 expect_error "splice name '../x'" deepmimic_walk deepmimic_punch --parts R_Arm --name ../x
 expect_error "timing 'loop'" deepmimic_walk deepmimic_punch --parts R_Arm --name x --timing loop

@@ -13,8 +13,8 @@ struct ImitationRewardConfig {
   // r = w_p e^{-k_p mse_p} + w_r e^{-k_r mse_r} + w_v e^{-k_v mse_v} + w_w e^{-k_w mse_w}
   double k_pos = 100, k_rot = 10, k_vel = 0.1, k_ang_vel = 0.1;
   double w_pos = 0.5, w_rot = 0.3, w_vel = 0.1, w_ang_vel = 0.1;
-  // The bodies the four terms average over (spec indices, SessionConfig.reward_parts); empty:
-  // every body. A part retrained alone is rewarded for its own bodies, so the frozen parts'
+  // The bodies the four terms average over (spec indices, sorted, each once;
+  // SessionConfig.reward_parts); empty: every body. A part retrained alone is rewarded for its own bodies, so the frozen parts'
   // errors do not drown its signal.
   std::vector<int> bodies;
   // Power penalty -c * sum |tau * qdot|, off for the first frames after a reset.

@@ -23,6 +23,24 @@ std::vector<int> PartLayout::BodyOrder() const {
   return order;
 }
 
+absl::StatusOr<std::vector<int>> PartLayout::BodiesOfParts(const std::vector<std::string>& names,
+                                                          absl::string_view field) const {
+  std::vector<int> bodies;
+  std::vector<bool> named(parts.size(), false);
+  for (size_t i = 0; i < names.size(); ++i) {
+    size_t p = 0;
+    while (p < parts.size() && parts[p].name != names[i]) ++p;
+    if (p == parts.size()) {
+      return absl::InvalidArgumentError(absl::StrCat(field, "[", i, "]: '", names[i], "' is not a part of layout '", name,
+                                                     "' (", absl::StrJoin(PartNames(), ", "), ")"));
+    }
+    if (named[p]) return absl::InvalidArgumentError(absl::StrCat(field, "[", i, "]: '", names[i], "' is given twice"));
+    named[p] = true;
+    bodies.insert(bodies.end(), parts[p].bodies.begin(), parts[p].bodies.end());
+  }
+  return bodies;
+}
+
 absl::StatusOr<PartLayout> MakePartLayout(const std::string& name,
                                           const std::vector<std::pair<std::string, std::vector<std::string>>>& parts,
                                           const HumanoidSpec& spec) {

@@ -25,6 +25,9 @@ struct PartLayout {
   // Every body once, part after part: the order of bodies in observations and actions.
   std::vector<int> BodyOrder() const;
   std::vector<std::string> PartNames() const;
+  // The bodies of the named parts, part after part; INVALID_ARGUMENT naming `field`[i] for a name
+  // that is not a part of this layout or is given twice.
+  absl::StatusOr<std::vector<int>> BodiesOfParts(const std::vector<std::string>& names, absl::string_view field) const;
 };
 
 // Checks that every body of `spec` appears in exactly one part.
