@@ -121,6 +121,7 @@ ServerPoolOptions Trainer::PoolOptions() const {
   pool.session.set_amp_obs(v1::FULL);
   pool.session.set_loop_clips(config.loop_clips);
   for (const std::string& part : config.reward_parts) pool.session.add_reward_parts(part);
+  pool.session.set_reward_relative_to_root(config.reward_relative_to_root);
   if (!IsTrackingTask(config.task)) {
     pool.session.set_task(config.task);
     v1::TaskSettings* settings = pool.session.mutable_task_settings();

@@ -37,6 +37,9 @@ absl::Status ValidateTask(const TrainerConfig& c) {
   if (!IsTrackingTask(c.task) && !c.reward_parts.empty()) {
     return absl::InvalidArgumentError(absl::StrCat("--reward_parts: tracking only, not with --task ", c.task));
   }
+  if (!IsTrackingTask(c.task) && c.reward_relative_to_root) {
+    return absl::InvalidArgumentError(absl::StrCat("--reward_relative_to_root: tracking only, not with --task ", c.task));
+  }
   if (!IsTrackingTask(c.task) && c.loop_clips) {
     return absl::InvalidArgumentError(absl::StrCat("--loop_clips: tracking only, not with --task ", c.task));
   }
@@ -213,6 +216,7 @@ std::string TrainerConfig::ToJson() const {
     json["frozen_parts_act_on_mean"] = frozen_parts_act_on_mean;
   }
   if (!reward_parts.empty()) json["reward_parts"] = reward_parts;
+  if (reward_relative_to_root) json["reward_relative_to_root"] = true;
   if (!IsTrackingTask(task)) {
     json["skills"] = skills;
     json["task_hidden"] = model.task_hidden;

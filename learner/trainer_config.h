@@ -63,6 +63,9 @@ struct TrainerConfig {
   // SessionConfig.reward_parts: the imitation reward averages over these parts' bodies only (empty:
   // every body), e.g. the retrained parts, whose signal the frozen parts' errors would drown.
   std::vector<std::string> reward_parts;
+  // SessionConfig.reward_relative_to_root: the rewarded bodies are compared in the root's frame,
+  // so the root's drift (the frozen legs') stays out of the retrained parts' reward.
+  bool reward_relative_to_root = false;
   // With train_parts: the frozen parts act on their means (no exploration noise, no share in PPO's
   // ratios), as they will in evaluation.
   bool frozen_parts_act_on_mean = false;

@@ -130,6 +130,19 @@ TEST(SessionConfigTest, RewardPartsResolveToTheirBodies) {
   status = refusal([](auto& c) { c.set_task("steer"); });
   EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
   EXPECT_THAT(std::string(status.message()), ::testing::HasSubstr("reward_parts: task steer"));
+
+  EXPECT_FALSE(settings->env.reward.relative_to_root);
+  config.set_reward_relative_to_root(true);
+  settings = ParseSessionConfig(config, kMaxEnvs, kMaxLibraryClips, Layouts());
+  ASSERT_TRUE(settings.ok()) << settings.status();
+  EXPECT_TRUE(settings->env.reward.relative_to_root);
+  status = refusal([](auto& c) {
+    c.clear_reward_parts();
+    c.set_reward_relative_to_root(true);
+    c.set_task("reach");
+  });
+  EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(std::string(status.message()), ::testing::HasSubstr("reward_relative_to_root: task reach"));
 }
 
 TEST(SessionConfigTest, SeedRequestsOfTheFuzzerDecode) {

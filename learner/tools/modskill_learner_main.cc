@@ -77,6 +77,9 @@ ABSL_FLAG(bool, frozen_parts_act_on_mean, false,
 ABSL_FLAG(std::vector<std::string>, reward_parts, {},
           "tracking: the imitation reward averages over these parts' bodies only (e.g. the --train_parts), so the "
           "frozen parts' errors do not drown the retrained parts' signal (default: every body)");
+ABSL_FLAG(bool, reward_relative_to_root, false,
+          "tracking: the imitation reward compares the rewarded bodies in the root's frame, so the root's drift "
+          "(set by the frozen parts) stays out of the --reward_parts' reward");
 ABSL_FLAG(bool, loop_clips, false,
           "tracking: clips loop (on at frame 1, carried by their own displacement) and episodes run 300 steps, so "
           "the skills learn to go on as a task's looping base motion asks");
@@ -324,6 +327,7 @@ absl::Status TaskFromFlags(TrainerConfig* config) {
   config->init_from = absl::GetFlag(FLAGS_init_from);
   config->train_parts = absl::GetFlag(FLAGS_train_parts);
   config->reward_parts = absl::GetFlag(FLAGS_reward_parts);
+  config->reward_relative_to_root = absl::GetFlag(FLAGS_reward_relative_to_root);
   config->frozen_parts_act_on_mean = absl::GetFlag(FLAGS_frozen_parts_act_on_mean);
   config->train_attention = absl::GetFlag(FLAGS_train_attention);
   if (const std::vector<std::string> hidden = absl::GetFlag(FLAGS_task_hidden); !hidden.empty()) {

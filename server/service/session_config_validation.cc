@@ -128,6 +128,10 @@ absl::StatusOr<SessionSettings> ParseSessionConfig(const v1::SessionConfig& conf
   if (!family_ranges.ok()) return family_ranges.status();
   auto reward_bodies = ToRewardBodies(config.reward_parts(), *layout, *task);
   if (!reward_bodies.ok()) return reward_bodies.status();
+  if (config.reward_relative_to_root() && IsGoalTask(*task)) {
+    return absl::InvalidArgumentError(absl::StrCat("reward_relative_to_root: task ", TaskInfoOf(*task).name,
+                                                   " has no imitation reward"));
+  }
   settings.amp_frames = config.amp_obs() == v1::NEWEST ? 1 : config.amp_obs() == v1::OMIT ? 0 : kAmpHistory;
   if (config.motions_size() > max_library_clips) {
     return absl::InvalidArgumentError(absl::StrCat("motions: ", config.motions_size(),
@@ -148,6 +152,7 @@ absl::StatusOr<SessionSettings> ParseSessionConfig(const v1::SessionConfig& conf
   settings.env.loop_clips = config.loop_clips();
   settings.env.family = *std::move(family_ranges);
   settings.env.reward.bodies = *std::move(reward_bodies);
+  settings.env.reward.relative_to_root = config.reward_relative_to_root();
   // A family leaves its clip by design (a higher jump, another gravity): a loose default.
   if (family && config.termination_distance() == 0 && *termination == TerminationMode::kTraining) {
     settings.env.termination_distance = kFamilyDefaultTerminationDistance;

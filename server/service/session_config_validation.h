@@ -30,7 +30,7 @@ struct SessionSettings {
 // The checks in the order the service reports them: num_envs in [1, max_envs_per_session]
 // (above: RESOURCE_EXHAUSTED), max_episode_steps >= 0, the layout (NOT_FOUND), termination,
 // its distance, action mode and residual scale, termination bodies, amp_obs, the task and its
-// settings, the family, reward_parts, no more motion names than max_library_clips (INVALID_ARGUMENT). The clip names themselves are left to the library.
+// settings, the family, reward_parts, reward_relative_to_root, no more motion names than max_library_clips (INVALID_ARGUMENT). The clip names themselves are left to the library.
 absl::StatusOr<SessionSettings> ParseSessionConfig(const v1::SessionConfig& config, int max_envs_per_session,
                                                    int max_library_clips, const PartLayoutCatalog& layouts);
 

@@ -320,11 +320,19 @@ class ClientTest(unittest.TestCase):
         actions = np.random.default_rng(3).uniform(-1, 1, (4, 69)).astype(np.float32)
         kwargs = dict(motions=["deepmimic_walk"], seed=9, termination="none", action_mode="residual")
         with self.client.session(4, **kwargs) as whole, \
-                self.client.session(4, reward_parts=["R_Arm", "L_Arm"], **kwargs) as arms:
+                self.client.session(4, reward_parts=["R_Arm", "L_Arm"], **kwargs) as arms, \
+                self.client.session(4, reward_parts=["R_Arm", "L_Arm"], reward_relative_to_root=True,
+                                    **kwargs) as arms_in_root:
             for _ in range(3):
-                a, b = whole.step(actions), arms.step(actions)
+                a, b, c = whole.step(actions), arms.step(actions), arms_in_root.step(actions)
             np.testing.assert_allclose(a.mean_body_error, b.mean_body_error)
+            np.testing.assert_allclose(a.mean_body_error, c.mean_body_error)
             self.assertFalse(np.allclose(a.reward, b.reward))
+            self.assertFalse(np.allclose(b.reward, c.reward))
+        with self.assertRaises(modskill.ServerError) as caught:
+            self.client.session(1, task="steer", reward_relative_to_root=True)
+        self.assertEqual(caught.exception.code, grpc.StatusCode.INVALID_ARGUMENT)
+        self.assertIn("reward_relative_to_root", caught.exception.message)
         with self.assertRaises(modskill.ServerError) as caught:
             self.client.session(1, reward_parts=["R_Arm", "Tail"])
         self.assertEqual(caught.exception.code, grpc.StatusCode.INVALID_ARGUMENT)

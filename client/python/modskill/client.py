@@ -379,7 +379,7 @@ class Client:
                 termination_bodies: Union[str, int] = "all", task: str = "",
                 task_settings: Optional[Mapping[str, float]] = None, loop_clips: bool = False,
                 family: Optional[Mapping[str, Union[float, Tuple[float, float]]]] = None,
-                reward_parts: Sequence[str] = ()) -> "Session":
+                reward_parts: Sequence[str] = (), reward_relative_to_root: bool = False) -> "Session":
         """Opens a simulation session of ``num_envs`` envs and returns it once the server has
         reset them (``Session.initial`` holds the first observations).
 
@@ -412,6 +412,8 @@ class Client:
           reward_parts: parts of the layout (e.g. ["R_Arm", "L_Arm"]) whose bodies alone the
             imitation reward averages over, for a part retrained alone; empty: every body.
             Termination and the errors still use every body.
+          reward_relative_to_root: tracking only: the reward compares the rewarded bodies in the
+            root's frame, so the root's drift stays out of a part's reward.
 
         Use it as a context manager (or call ``close()``) so that the server frees the envs.
         """
@@ -430,7 +432,8 @@ class Client:
                                                            "termination_bodies"),
                                   task=task, task_settings=pb.TaskSettings(**dict(task_settings or {})),
                                   loop_clips=bool(loop_clips), family=_family_config(family),
-                                  reward_parts=[reward_parts] if isinstance(reward_parts, str) else list(reward_parts))
+                                  reward_parts=[reward_parts] if isinstance(reward_parts, str) else list(reward_parts),
+                                  reward_relative_to_root=bool(reward_relative_to_root))
         session = Session(self, config)
         self._sessions.add(session)
         return session

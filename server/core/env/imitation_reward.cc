@@ -4,6 +4,21 @@
 #include <cmath>
 
 namespace modskill {
+namespace {
+
+// A body's pose and motion seen from the root (body 0): what a part does on its own.
+struct BodyInRoot {
+  Vec3 pos, vel, ang_vel;
+  Quat rot;
+};
+
+BodyInRoot InRootFrame(const HumanoidState& state, int b) {
+  const Quat to_root = state.body_rot[0].conjugate();
+  return {to_root * (state.body_pos[b] - state.body_pos[0]), to_root * (state.body_vel[b] - state.body_vel[0]),
+          to_root * (state.body_ang_vel[b] - state.body_ang_vel[0]), to_root * state.body_rot[b]};
+}
+
+}  // namespace
 
 TrackingErrors ComputeImitationTerms(const ImitationRewardConfig& config, const HumanoidState& sim,
                                      const HumanoidState& reference, float* terms, double* body_distance) {
@@ -20,6 +35,15 @@ TrackingErrors ComputeImitationTerms(const ImitationRewardConfig& config, const 
     errors.max_body_distance = std::max(errors.max_body_distance, distance);
     errors.mean_body_distance += distance;
     if (!rewarded(b)) continue;
+    if (config.relative_to_root) {
+      const BodyInRoot ref = InRootFrame(reference, b), own = InRootFrame(sim, b);
+      pos_sq += (ref.pos - own.pos).squaredNorm();
+      const double angle = RotationAngle(ref.rot * own.rot.conjugate());
+      rot_sq += angle * angle;
+      vel_sq += (ref.vel - own.vel).squaredNorm();
+      ang_vel_sq += (ref.ang_vel - own.ang_vel).squaredNorm();
+      continue;
+    }
     pos_sq += distance_sq;
     const double angle = RotationAngle(reference.body_rot[b] * sim.body_rot[b].conjugate());
     rot_sq += angle * angle;

@@ -17,6 +17,9 @@ struct ImitationRewardConfig {
   // SessionConfig.reward_parts); empty: every body. A part retrained alone is rewarded for its own bodies, so the frozen parts'
   // errors do not drown its signal.
   std::vector<int> bodies;
+  // The four terms compare each rewarded body in the root's frame (SessionConfig.
+  // reward_relative_to_root): a part's own motion, without the root's drift the other parts cause.
+  bool relative_to_root = false;
   // Power penalty -c * sum |tau * qdot|, off for the first frames after a reset.
   double energy_coefficient = 0.0005;
   int energy_free_steps = 3;
