@@ -14,10 +14,12 @@
 # with your own; each starts from --tracker with --learner_flags, e.g.
 #   arms_reward="--train_parts R_Arm,L_Arm --reward_parts R_Arm,L_Arm --frozen_parts_act_on_mean"
 #
-# Per part: the error of its bodies relative to the root (the part's own motion, without the
-# drift of the whole body), averaged over the steps each rollout tracked. --motions serves a library
-# of your own (e.g. the shipped clips plus one made by `modskill-motion splice`) to every server;
-# --learner_flags go to every variant (e.g. "--termination_distance 0.5").
+# Per part, averaged over the steps each rollout tracked: the error of its bodies relative to the
+# root (without the drift of the whole body), and its "own motion" error, its bodies in the frame
+# of the body it hangs from (an arm: the Chest; that frame's orientation in simulation and
+# reference found from the positions of that body and its children), which the rest of the
+# body's pose does not enter either. --motions serves a library of your own (e.g. the shipped
+# clips plus one made by `modskill-motion splice`) to every server; --learner_flags go to every variant (e.g. "--termination_distance 0.5").
 # --eval_only evaluates the policies of an earlier run in DIR; --resume continues its variants for
 # --minutes more (bench/learning_bench.sh --resume) before evaluating.
 set -euo pipefail
@@ -37,7 +39,7 @@ while (($#)); do
     --learner_flags) LEARNER_FLAGS="$2"; shift 2 ;;
     --eval_only) EVAL_ONLY=1; shift ;;
     --resume) RESUME="--resume"; shift ;;
-    -h|--help) sed -n 2,23p "$0"; exit 0 ;;
+    -h|--help) sed -n 2,24p "$0"; exit 0 ;;
     [A-Za-z]*=*) VARIANT_ARGS+=("$1"); shift ;;
     *) echo "error: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
@@ -75,6 +77,31 @@ import modskill
 out, new, old, parts, server = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4].split(",")[:], sys.argv[5]
 with modskill.Client(server) as client:
     spec = client.describe()
+parent = [g.parent for g in spec.body_geometry]
+
+
+def own_motion_error(sim, ref, body_index, part_bodies):
+    """[T, len(part_bodies)] m: each body against the reference in the frame of the body the part
+    hangs from (its attachment: the Chest for an arm, the Pelvis for a leg), whose orientation in sim
+    and reference is found by aligning it and its children's positions (rigid in its frame; Kabsch).
+    What is left is the part's own motion: the rest of the body's pose and drift do not enter."""
+    members = [body_index[b] for b in part_bodies]
+    attachment = next(parent[m] for m in members if parent[m] not in members)
+    if attachment < 0:
+        attachment = members[0]
+    rigid = [attachment] + [b for b, p in enumerate(parent) if p == attachment]
+    errors = []
+    for s, r in zip(sim, ref):
+        a = s[rigid] - s[attachment]
+        b = r[rigid] - r[attachment]
+        u, _, vt = np.linalg.svd(a.T @ b)
+        d = np.sign(np.linalg.det(vt.T @ u.T))
+        rotation = vt.T @ np.diag([1, 1, d]) @ u.T  # rotation @ a[i] ~ b[i]
+        local_sim = (s[members] - s[attachment]) @ rotation.T
+        errors.append(np.linalg.norm(local_sim - (r[members] - r[attachment]), axis=-1))
+    return np.array(errors)
+
+
 rows = {}
 for name in sys.argv[6:]:
     if not os.path.exists(f"{out}/rollout_{name}.json"):
@@ -89,25 +116,33 @@ for name in sys.argv[6:]:
         part_error = {p.name: 1000 * float(local[:, [index[b] for b in p.bodies]].mean()) for p in spec.parts}
         retrained = [index[b] for p in spec.parts if p.name in parts for b in p.bodies]
         frozen = [index[b] for p in spec.parts if p.name not in parts for b in p.bodies]
+        own = {p.name: own_motion_error(sim, ref, index, p.bodies) for p in spec.parts}
+        own_mean = lambda chosen: 1000 * float(np.concatenate([own[p.name] for p in spec.parts if chosen(p)], 1).mean())
         rows[name][c["clip"]] = {"steps": c["steps"], "success": c["success"], "mpjpe_mm": c["mpjpe_mm"],
                                  "part_error_mm": part_error,
                                  "retrained_error_mm": 1000 * float(local[:, retrained].mean()),
-                                 "frozen_error_mm": 1000 * float(local[:, frozen].mean())}
+                                 "frozen_error_mm": 1000 * float(local[:, frozen].mean()),
+                                 "part_own_motion_error_mm": {k: 1000 * float(v.mean()) for k, v in own.items()},
+                                 "retrained_own_motion_error_mm": own_mean(lambda p: p.name in parts),
+                                 "frozen_own_motion_error_mm": own_mean(lambda p: p.name not in parts)}
         c.pop("frames")
 part_names = [p.name for p in spec.parts]
 with open(f"{out}/parts.md", "w") as f:
     head = ("| policy | clip | steps | E_mpjpe (mm) | " + " | ".join(f"{p} (mm)" for p in part_names) +
-            " | retrained parts (mm) | frozen parts (mm) |")
-    f.write(head + "\n|" + "---|" * (6 + len(part_names)) + "\n")
+            " | retrained parts (mm) | frozen parts (mm) | retrained, own motion (mm) | frozen, own motion (mm) |")
+    f.write(head + "\n|" + "---|" * (8 + len(part_names)) + "\n")
     for name, by_clip in rows.items():
         for clip in (new, old):
             r = by_clip[clip]
             cells = " | ".join(f"{r['part_error_mm'][p]:.1f}" + (" *" if p in parts else "") for p in part_names)
             f.write(f"| {name} | {clip} | {r['steps']}{' (all)' if r['success'] else ''} | {r['mpjpe_mm']:.1f} | {cells} | "
-                    f"{r['retrained_error_mm']:.1f} | {r['frozen_error_mm']:.1f} |\n")
+                    f"{r['retrained_error_mm']:.1f} | {r['frozen_error_mm']:.1f} | "
+                    f"{r['retrained_own_motion_error_mm']:.1f} | {r['frozen_own_motion_error_mm']:.1f} |\n")
     f.write(f"\n(* the retrained parts, {', '.join(parts)}; a part's error: its bodies' positions relative to the "
             "root against the reference's, averaged over its bodies and the steps tracked; the last two columns "
-            "average over all the retrained parts' bodies and over all the others')\n")
+            "average over all the retrained parts' bodies and over all the others'; own motion: each part's bodies in "
+            "the frame of the body it hangs from, aligned between simulation and reference, so that neither the "
+            "root's drift nor the rest of the body's pose enters)\n")
 json.dump(rows, open(f"{out}/parts.json", "w"), indent=1)
 print(open(f"{out}/parts.md").read())
 PY

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "absl/strings/str_cat.h"
+#include "common/name_lookup.h"
 #include "learner/policy_import.h"
 
 namespace modskill::learner {
@@ -15,24 +16,9 @@ void SetTrainable(const torch::nn::Module& module, bool trainable) {
 
 absl::StatusOr<std::vector<int>> PartIndices(const std::vector<std::string>& names, const std::string& layout_name,
                                               const NetworkLayout& layout) {
-  std::vector<int> indices;
-  for (size_t i = 0; i < names.size(); ++i) {
-    int found = -1;
-    for (size_t p = 0; p < layout.parts.size(); ++p) {
-      if (layout.parts[p].name == names[i]) found = static_cast<int>(p);
-    }
-    if (found < 0) {
-      std::string known;
-      for (const PartSlices& part : layout.parts) absl::StrAppend(&known, known.empty() ? "" : ", ", part.name);
-      return absl::InvalidArgumentError(
-          absl::StrCat("--train_parts[", i, "]: '", names[i], "' is not a part of the ", layout_name, " layout (", known, ")"));
-    }
-    if (std::find(indices.begin(), indices.end(), found) != indices.end()) {
-      return absl::InvalidArgumentError(absl::StrCat("--train_parts[", i, "]: '", names[i], "' is given twice"));
-    }
-    indices.push_back(found);
-  }
-  return indices;
+  std::vector<std::string> known;
+  for (const PartSlices& part : layout.parts) known.push_back(part.name);
+  return IndicesOfNames(names, known, "--train_parts", absl::StrCat("a part of the ", layout_name, " layout"));
 }
 
 }  // namespace

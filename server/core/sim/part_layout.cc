@@ -6,6 +6,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
 #include "common/atomic_file.h"
+#include "common/name_lookup.h"
 #include "common/shown_value.h"
 #include "server/core/util/data_paths.h"
 
@@ -25,19 +26,10 @@ std::vector<int> PartLayout::BodyOrder() const {
 
 absl::StatusOr<std::vector<int>> PartLayout::BodiesOfParts(const std::vector<std::string>& names,
                                                           absl::string_view field) const {
+  auto indices = IndicesOfNames(names, PartNames(), field, absl::StrCat("a part of layout '", name, "'"));
+  if (!indices.ok()) return indices.status();
   std::vector<int> bodies;
-  std::vector<bool> named(parts.size(), false);
-  for (size_t i = 0; i < names.size(); ++i) {
-    size_t p = 0;
-    while (p < parts.size() && parts[p].name != names[i]) ++p;
-    if (p == parts.size()) {
-      return absl::InvalidArgumentError(absl::StrCat(field, "[", i, "]: '", names[i], "' is not a part of layout '", name,
-                                                     "' (", absl::StrJoin(PartNames(), ", "), ")"));
-    }
-    if (named[p]) return absl::InvalidArgumentError(absl::StrCat(field, "[", i, "]: '", names[i], "' is given twice"));
-    named[p] = true;
-    bodies.insert(bodies.end(), parts[p].bodies.begin(), parts[p].bodies.end());
-  }
+  for (int p : *indices) bodies.insert(bodies.end(), parts[p].bodies.begin(), parts[p].bodies.end());
   return bodies;
 }
 
