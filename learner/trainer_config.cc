@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <tuple>
+#include <utility>
 
 #include <nlohmann/json.hpp>
 
@@ -34,14 +35,14 @@ absl::Status ValidateTask(const TrainerConfig& c) {
   if (!c.init_from.empty() && !IsTrackingTask(c.task)) {
     return absl::InvalidArgumentError(absl::StrCat("--init_from: tracking only, not with --task ", c.task, " (use --skills)"));
   }
-  if (!IsTrackingTask(c.task) && !c.reward_parts.empty()) {
-    return absl::InvalidArgumentError(absl::StrCat("--reward_parts: tracking only, not with --task ", c.task));
-  }
-  if (!IsTrackingTask(c.task) && c.reward_relative_to_root) {
-    return absl::InvalidArgumentError(absl::StrCat("--reward_relative_to_root: tracking only, not with --task ", c.task));
-  }
-  if (!IsTrackingTask(c.task) && c.loop_clips) {
-    return absl::InvalidArgumentError(absl::StrCat("--loop_clips: tracking only, not with --task ", c.task));
+  const std::pair<const char*, bool> tracking_only[] = {
+      {"--reward_parts", !c.reward_parts.empty()},
+      {"--reward_relative_to_root", c.reward_relative_to_root},
+      {"--loop_clips", c.loop_clips}};
+  for (const auto& [flag, given] : tracking_only) {
+    if (given && !IsTrackingTask(c.task)) {
+      return absl::InvalidArgumentError(absl::StrCat(flag, ": tracking only, not with --task ", c.task));
+    }
   }
   if (!IsTrackingTask(c.task) && c.model.whole_body) {
     return absl::InvalidArgumentError("--whole_body: not with a --task (the skills are per-part controllers)");

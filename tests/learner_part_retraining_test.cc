@@ -174,6 +174,20 @@ TEST(PartRetrainingTest, BadSettingsAreNamed) {
   EXPECT_THAT(std::string(Trainer::Create(on_mean).status().message()),
               HasSubstr("--frozen_parts_act_on_mean: only with --train_parts"));
 
+  // The reward's settings are tracking's: a task run refuses them before any session opens.
+  TrainerConfig steer = RetrainArms(*server, "bad");
+  steer.init_from.clear();
+  steer.train_parts.clear();
+  steer.frozen_parts_act_on_mean = false;
+  steer.task = "steer";
+  steer.skills = "skills/policy.pt";
+  steer.reward_relative_to_root = true;
+  EXPECT_THAT(std::string(Trainer::Create(steer).status().message()),
+              HasSubstr("--reward_relative_to_root: tracking only, not with --task steer"));
+  steer.reward_parts = {"R_Arm"};
+  EXPECT_THAT(std::string(Trainer::Create(steer).status().message()),
+              HasSubstr("--reward_parts: tracking only, not with --task steer"));
+
   // An unknown reward part is the server's refusal, named, at once (not after --server_timeout_s).
   TrainerConfig tail = RetrainArms(*server, "bad");
   tail.reward_parts = {"Tail"};

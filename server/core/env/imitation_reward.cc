@@ -6,16 +6,17 @@
 namespace modskill {
 namespace {
 
-// A body's pose and motion seen from the root (body 0): what a part does on its own.
-struct BodyInRoot {
+// A body's pose and motion as the reward compares them: in the world, or, given the root's
+// inverse rotation, seen from the root (body 0), which is what a part does on its own.
+struct ComparedBody {
   Vec3 pos, vel, ang_vel;
   Quat rot;
 };
 
-BodyInRoot InRootFrame(const HumanoidState& state, int b) {
-  const Quat to_root = state.body_rot[0].conjugate();
-  return {to_root * (state.body_pos[b] - state.body_pos[0]), to_root * (state.body_vel[b] - state.body_vel[0]),
-          to_root * (state.body_ang_vel[b] - state.body_ang_vel[0]), to_root * state.body_rot[b]};
+ComparedBody Compared(const HumanoidState& state, int b, const Quat* to_root) {
+  if (to_root == nullptr) return {state.body_pos[b], state.body_vel[b], state.body_ang_vel[b], state.body_rot[b]};
+  return {*to_root * (state.body_pos[b] - state.body_pos[0]), *to_root * (state.body_vel[b] - state.body_vel[0]),
+          *to_root * (state.body_ang_vel[b] - state.body_ang_vel[0]), *to_root * state.body_rot[b]};
 }
 
 }  // namespace
@@ -26,6 +27,9 @@ TrackingErrors ComputeImitationTerms(const ImitationRewardConfig& config, const 
   const auto rewarded = [&](int b) {
     return config.bodies.empty() || std::binary_search(config.bodies.begin(), config.bodies.end(), b);
   };
+  const Quat reference_to_root = reference.body_rot[0].conjugate(), sim_to_root = sim.body_rot[0].conjugate();
+  const Quat* reference_frame = config.relative_to_root ? &reference_to_root : nullptr;
+  const Quat* sim_frame = config.relative_to_root ? &sim_to_root : nullptr;
   TrackingErrors errors;
   double pos_sq = 0, rot_sq = 0, vel_sq = 0, ang_vel_sq = 0;
   for (int b = 0; b < bodies; ++b) {
@@ -35,20 +39,12 @@ TrackingErrors ComputeImitationTerms(const ImitationRewardConfig& config, const 
     errors.max_body_distance = std::max(errors.max_body_distance, distance);
     errors.mean_body_distance += distance;
     if (!rewarded(b)) continue;
-    if (config.relative_to_root) {
-      const BodyInRoot ref = InRootFrame(reference, b), own = InRootFrame(sim, b);
-      pos_sq += (ref.pos - own.pos).squaredNorm();
-      const double angle = RotationAngle(ref.rot * own.rot.conjugate());
-      rot_sq += angle * angle;
-      vel_sq += (ref.vel - own.vel).squaredNorm();
-      ang_vel_sq += (ref.ang_vel - own.ang_vel).squaredNorm();
-      continue;
-    }
-    pos_sq += distance_sq;
-    const double angle = RotationAngle(reference.body_rot[b] * sim.body_rot[b].conjugate());
+    const ComparedBody ref = Compared(reference, b, reference_frame), own = Compared(sim, b, sim_frame);
+    pos_sq += config.relative_to_root ? (ref.pos - own.pos).squaredNorm() : distance_sq;
+    const double angle = RotationAngle(ref.rot * own.rot.conjugate());
     rot_sq += angle * angle;
-    vel_sq += (reference.body_vel[b] - sim.body_vel[b]).squaredNorm();
-    ang_vel_sq += (reference.body_ang_vel[b] - sim.body_ang_vel[b]).squaredNorm();
+    vel_sq += (ref.vel - own.vel).squaredNorm();
+    ang_vel_sq += (ref.ang_vel - own.ang_vel).squaredNorm();
   }
   errors.mean_body_distance /= bodies;
   const int rewarded_bodies = config.bodies.empty() ? bodies : static_cast<int>(config.bodies.size());
