@@ -12,6 +12,7 @@
 #include "server/core/sim/humanoid_model.h"
 #include "server/core/sim/pd_controller.h"
 #include "server/core/util/data_paths.h"
+#include "tests/test_files.h"
 #include "tests/test_fixtures.h"
 
 namespace modskill {
@@ -130,8 +131,7 @@ TEST(HumanoidSpecTest, ScalingChangesLimbsAndStillCompiles) {
 }
 
 TEST(HumanoidSpecTest, BadSkeletonFilesAreErrors) {
-  const std::string dir = MODSKILL_TEST_TMP_DIR;
-  std::filesystem::create_directories(dir);
+  const std::string dir = ProcessTempDir("humanoid_test");
   auto write = [&](const std::string& name, const std::string& text) {
     std::ofstream(dir + "/" + name) << text;
     return dir + "/" + name;

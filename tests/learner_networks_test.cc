@@ -32,6 +32,7 @@
 #include "server/service/discriminator_scorer.h"
 #include "server/service/proto_conversions.h"
 #include "tests/env_specs.h"
+#include "tests/test_files.h"
 
 namespace modskill::learner {
 namespace {
@@ -50,8 +51,7 @@ ModelConfig Config(const std::string& preset = "small") {
 }
 
 std::string TmpPath(const std::string& name) {
-  std::filesystem::create_directories(MODSKILL_TEST_TMP_DIR);
-  return std::string(MODSKILL_TEST_TMP_DIR) + "/" + name;
+  return ProcessTempDir("networks") + "/" + name;
 }
 
 // The spec of the server's env, as a checkpoint stores it.

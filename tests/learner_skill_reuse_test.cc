@@ -35,6 +35,7 @@
 #include "server/core/sim/physics_options.h"
 #include "server/service/proto_conversions.h"
 #include "tests/env_specs.h"
+#include "tests/test_files.h"
 
 namespace modskill::learner {
 namespace {
@@ -52,8 +53,7 @@ ModelConfig SmallConfig() { return *ModelConfig::Preset("small"); }
 constexpr int64_t kSteerGoalStart = 934, kSteerObs = 937;
 
 std::string TmpPath(const std::string& name) {
-  std::filesystem::create_directories(MODSKILL_TEST_TMP_DIR);
-  return std::string(MODSKILL_TEST_TMP_DIR) + "/" + name;
+  return ProcessTempDir("skill_reuse") + "/" + name;
 }
 
 // Statistics as after training: far from mean 0, var 1.

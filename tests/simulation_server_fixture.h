@@ -16,6 +16,7 @@
 #include "common/policy/policy_checkpoint.h"
 #include "server/core/env/policy_fit.h"
 #include "tests/server_fixture.h"
+#include "tests/test_files.h"
 
 namespace modskill {
 
@@ -26,11 +27,7 @@ inline v1::SessionConfig Config(int envs, uint64_t seed = 1) {
   return config;
 }
 
-inline std::string TempDir() {
-  const std::string dir = std::string(MODSKILL_TEST_TMP_DIR) + "/server";
-  std::filesystem::create_directories(dir);
-  return dir;
-}
+inline std::string TempDir() { return ProcessTempDir("server"); }
 
 // The open-loop reference as a policy file: a zero residual policy (PD targets = the reference
 // pose of the next frame), 5 parts, as TorchScript bytes; for `task`'s observation.

@@ -3,6 +3,8 @@
 #ifndef MODSKILL_TESTS_TEST_FILES_H_
 #define MODSKILL_TESTS_TEST_FILES_H_
 
+#include <unistd.h>
+
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -22,6 +24,16 @@ inline std::string TestTempPath(const std::string& subdirectory, const std::stri
   const std::string test_name =
       absl::StrReplaceAll(absl::StrCat(test->test_suite_name(), ".", test->name()), {{"/", "_"}});
   return (directory / absl::StrCat(test_name, ".", file_name)).string();
+}
+
+// MODSKILL_TEST_TMP_DIR/<subdirectory>/pid<N>: for files a suite shares between its tests
+// (a tracker exported once, a server's checkpoint directory), which concurrent test processes
+// must not overwrite under each other.
+inline std::string ProcessTempDir(const std::string& subdirectory) {
+  const std::filesystem::path directory =
+      std::filesystem::path(MODSKILL_TEST_TMP_DIR) / subdirectory / absl::StrCat("pid", getpid());
+  std::filesystem::create_directories(directory);
+  return directory.string();
 }
 
 inline void WriteBytes(const std::string& path, const std::string& bytes) {

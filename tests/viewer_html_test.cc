@@ -17,6 +17,7 @@
 #include "server/core/motion/clip_view.h"
 #include "server/core/motion/motion_library.h"
 #include "server/core/sim/humanoid_model.h"
+#include "tests/test_files.h"
 #include "tests/viewer_page_reading.h"
 
 namespace modskill {
@@ -27,7 +28,7 @@ using ::testing::HasSubstr;
 class ViewerHtmlTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = std::string(MODSKILL_TEST_TMP_DIR) + "/viewer_html_test";
+    dir_ = ProcessTempDir("viewer_html_test");
     std::filesystem::remove_all(dir_);
     std::filesystem::create_directories(dir_);
     // A stand-in for three.js, so that these tests need no libjs-three.
