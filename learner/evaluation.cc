@@ -1,14 +1,41 @@
 #include "learner/evaluation.h"
 
+#include <algorithm>
 #include <map>
 
 #include <nlohmann/json.hpp>
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "absl/strings/str_join.h"
 #include "common/policy/policy_checkpoint.h"
 
 namespace modskill::learner {
+namespace {
+
+// The bodies the policy's task watches (Describe's TaskInfo.tracked_bodies) and their errors.
+absl::Status AddTrackedBodies(const v1::EnvSpec& described, const std::string& checkpoint_bytes,
+                              EvaluationReport* report) {
+  auto checkpoint = PolicyCheckpoint::LoadBytes(checkpoint_bytes);
+  if (!checkpoint.ok()) return checkpoint.status();
+  for (const v1::TaskInfo& task : described.tasks()) {
+    if (task.name() != (*checkpoint)->spec().task) continue;
+    for (const std::string& body : task.tracked_bodies()) {
+      const auto found = std::find(report->body_names.begin(), report->body_names.end(), body);
+      if (found == report->body_names.end()) {
+        return absl::InternalError(absl::StrCat("Describe: tracked body '", body, "' of task ", task.name(),
+                                                " is not among body_names"));
+      }
+      const double error = report->body_error_mm[found - report->body_names.begin()];
+      report->tracked_bodies.push_back(body);
+      report->tracked_body_error_mm.push_back(error);
+      report->tracked_g_mpjpe_mm += error / task.tracked_bodies_size();
+    }
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace
 
 absl::StatusOr<EvaluationReport> Evaluate(SimulationClient& client, const std::string& checkpoint_name,
                                           const std::string& checkpoint_bytes, const std::vector<std::string>& clips,
@@ -60,6 +87,7 @@ absl::StatusOr<EvaluationReport> Evaluate(SimulationClient& client, const std::s
       break;
     }
   }
+  if (absl::Status status = AddTrackedBodies(*spec, checkpoint_bytes, &report); !status.ok()) return status;
   // One rollout at 0.5 m also answers stricter distances: a clip succeeds at d when its mean
   // body error never exceeded d (the trajectory up to that point is the same).
   for (int k = 0; k <= 6; ++k) {
@@ -85,6 +113,10 @@ std::string EvaluationReport::ToJson() const {
     json["part_error_mm"][p < part_names.size() ? part_names[p] : absl::StrCat("part", p)] = part_error_mm[p];
   }
   for (const auto& [distance, rate] : success_at_distance) json["success_at_distance"][absl::StrFormat("%.2f", distance)] = rate;
+  if (!tracked_bodies.empty()) {
+    json["tracked_g_mpjpe_mm"] = tracked_g_mpjpe_mm;
+    for (size_t b = 0; b < tracked_bodies.size(); ++b) json["tracked_body_error_mm"][tracked_bodies[b]] = tracked_body_error_mm[b];
+  }
   for (const v1::ClipMetrics& clip : clips) {
     nlohmann::json c;
     c["clip"] = clip.clip();
@@ -105,7 +137,18 @@ std::string EvaluationReport::ToMarkdown(const std::string& method) const {
   absl::StrAppendFormat(&md, "| %s | %.1f %% | %.1f | %.1f | %.1f | %.1f |\n", method, 100 * success_rate, g_mpjpe_mm,
                         mpjpe_mm, acc_error_mm, vel_error_mm);
   absl::StrAppend(&md, "\nErrors in mm (E_acc in mm/frame², E_vel in mm/frame), ", clips.size(),
-                  " clips, evaluation termination at 0.5 m mean body error.\n\n| Termination distance (m) |");
+                  " clips, evaluation termination at 0.5 m mean body error");
+  if (!tracked_bodies.empty()) {
+    absl::StrAppend(&md, " over the tracked bodies (", absl::StrJoin(tracked_bodies, ", "),
+                    "); the errors above are every body's.\n\n| Tracked body | E_g-mpjpe (mm) |\n|---|---|\n");
+    for (size_t b = 0; b < tracked_bodies.size(); ++b) {
+      absl::StrAppendFormat(&md, "| %s | %.1f |\n", tracked_bodies[b], tracked_body_error_mm[b]);
+    }
+    absl::StrAppendFormat(&md, "| **mean** | %.1f |\n", tracked_g_mpjpe_mm);
+  } else {
+    absl::StrAppend(&md, ".\n");
+  }
+  absl::StrAppend(&md, "\n| Termination distance (m) |");
   for (const auto& [distance, rate] : success_at_distance) absl::StrAppendFormat(&md, " %.2f |", distance);
   absl::StrAppend(&md, "\n|---|");
   for (size_t k = 0; k < success_at_distance.size(); ++k) absl::StrAppend(&md, "---|");

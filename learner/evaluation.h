@@ -26,6 +26,12 @@ struct EvaluationReport {
   std::vector<double> body_error_mm;  // per body, frame-weighted
   std::vector<double> part_error_mm;  // per part
   std::vector<std::pair<double, double>> success_at_distance;  // (m, rate) for 0.5, 0.45, ..., 0.2
+  // A task that watches some bodies only (vr_tracking, TaskInfo.tracked_bodies): their names,
+  // E_g-mpjpe over them and each one's error (frame-weighted). Succ is then the task's (it
+  // terminates on them); every other figure stays the whole body's.
+  std::vector<std::string> tracked_bodies;
+  double tracked_g_mpjpe_mm = 0;
+  std::vector<double> tracked_body_error_mm;
 
   std::string ToJson() const;
   // A table like Table 1 of the ModSkill paper, plus success vs termination distance and

@@ -14,6 +14,26 @@ void SetTrainable(const torch::nn::Module& module, bool trainable) {
   for (torch::Tensor parameter : module.parameters()) parameter.set_requires_grad(trainable);  // shares the storage
 }
 
+// Part p's controller and, with its attention, its value, key and query maps.
+std::vector<const torch::nn::Module*> ModulesOfPart(const ModSkillPolicyImpl& policy, int p, bool with_attention) {
+  std::vector<const torch::nn::Module*> modules = {policy.controllers()[p].get()};
+  const SkillAttentionImpl& attention = *policy.attention();
+  if (!with_attention) return modules;
+  modules.push_back(attention.values()[p].get());
+  if (attention.uses_attention()) {
+    modules.push_back(attention.keys()[p].get());
+    modules.push_back(attention.queries()[p].get());
+  }
+  return modules;
+}
+
+// `to` takes `from`'s weights: both are the same module of two policies built from one config.
+void CopyWeights(const torch::nn::Module& from, const torch::nn::Module& to) {
+  torch::NoGradGuard no_grad;
+  const std::vector<torch::Tensor> sources = from.parameters(), targets = to.parameters();
+  for (size_t i = 0; i < targets.size(); ++i) targets[i].copy_(sources[i]);
+}
+
 absl::StatusOr<std::vector<int>> PartIndices(const std::vector<std::string>& names, const std::string& layout_name,
                                               const NetworkLayout& layout) {
   std::vector<std::string> known;
@@ -25,7 +45,8 @@ absl::StatusOr<std::vector<int>> PartIndices(const std::vector<std::string>& nam
 
 absl::StatusOr<RetrainedTracker> LoadTrackerForRetraining(const std::string& path, const std::vector<std::string>& train_parts,
                                                           const std::string& layout_name, const NetworkLayout& layout,
-                                                          const ActionMapping& action, bool train_attention) {
+                                                          const ActionMapping& action, bool train_attention,
+                                                          bool fresh_parts) {
   auto exported = ReadExportedPolicy(path);
   if (!exported.ok()) return absl::Status(exported.status().code(), absl::StrCat("--init_from: ", exported.status().message()));
   const PolicySpec& spec = exported->spec;
@@ -53,14 +74,16 @@ absl::StatusOr<RetrainedTracker> LoadTrackerForRetraining(const std::string& pat
   ModSkillPolicyImpl& policy = *tracker.policy;
   if (policy.config().whole_body) return misfit("a whole-body tracker has no part controllers to retrain apart");
   SetTrainable(policy, false);
-  const SkillAttentionImpl& attention = *policy.attention();
   for (int p : tracker.trained_parts) {
-    SetTrainable(*policy.controllers()[p], true);
-    if (!train_attention) continue;
-    SetTrainable(*attention.values()[p], true);
-    if (attention.uses_attention()) {
-      SetTrainable(*attention.keys()[p], true);
-      SetTrainable(*attention.queries()[p], true);
+    for (const torch::nn::Module* module : ModulesOfPart(policy, p, train_attention)) SetTrainable(*module, true);
+  }
+  if (fresh_parts) {
+    // A policy as the trainer would start one: the fresh parts take its initial weights.
+    const ModSkillPolicy fresh(layout, policy.config());
+    for (int p : tracker.trained_parts) {
+      const std::vector<const torch::nn::Module*> from = ModulesOfPart(*fresh, p, train_attention),
+                                                  to = ModulesOfPart(policy, p, train_attention);
+      for (size_t m = 0; m < to.size(); ++m) CopyWeights(*from[m], *to[m]);
     }
   }
   tracker.obs_norm->FreezeDims(torch::ones({layout.obs_size}, torch::kBool));

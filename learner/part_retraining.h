@@ -7,7 +7,8 @@
 // Without --train_parts every part trains (a tracker continued on new clips). With
 // train_attention false the named parts' controllers train alone: every part's z then stays the
 // tracker's (the attention mixes every part's key and value into each part's z, so a retrained
-// map moves the frozen parts' z too).
+// map moves the frozen parts' z too). With fresh_parts the named parts start from fresh weights, as
+// a part new to the tracker would (a new controller, and new attention maps when they train).
 #ifndef MODSKILL_LEARNER_PART_RETRAINING_H_
 #define MODSKILL_LEARNER_PART_RETRAINING_H_
 
@@ -34,7 +35,8 @@ struct RetrainedTracker {
 // observation or action mapping than this run's, or when parts are named for a whole-body tracker.
 absl::StatusOr<RetrainedTracker> LoadTrackerForRetraining(const std::string& path, const std::vector<std::string>& train_parts,
                                                           const std::string& layout_name, const NetworkLayout& layout,
-                                                          const ActionMapping& action, bool train_attention = true);
+                                                          const ActionMapping& action, bool train_attention = true,
+                                                          bool fresh_parts = false);
 
 }  // namespace modskill::learner
 

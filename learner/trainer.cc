@@ -181,7 +181,7 @@ absl::Status Trainer::BuildNetworks(const v1::EnvSpec& spec) {
     action.mode = ParseActionMode(config_.action_mode).value_or(ActionMode::kResidual);
     action.residual_scale = config_.residual_scale;
     auto tracker = LoadTrackerForRetraining(config_.init_from, config_.train_parts, spec.part_layout(), layout_, action,
-                                            config_.train_attention);
+                                            config_.train_attention, config_.fresh_parts);
     if (!tracker.ok()) return tracker.status();
     policy_ = tracker->policy;
     obs_norm_ = tracker->obs_norm;

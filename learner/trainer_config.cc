@@ -32,6 +32,9 @@ absl::Status ValidateTask(const TrainerConfig& c) {
   if (!c.train_attention && c.train_parts.empty()) {
     return absl::InvalidArgumentError("--train_attention=false: only with --train_parts");
   }
+  if (c.fresh_parts && c.train_parts.empty()) {
+    return absl::InvalidArgumentError("--fresh_parts: only with --train_parts (the parts that start fresh)");
+  }
   if (!c.init_from.empty() && !IsTrackingTask(c.task)) {
     return absl::InvalidArgumentError(absl::StrCat("--init_from: tracking only, not with --task ", c.task, " (use --skills)"));
   }
@@ -214,6 +217,7 @@ std::string TrainerConfig::ToJson() const {
     json["init_from"] = init_from;
     json["train_parts"] = train_parts;
     json["train_attention"] = train_attention;
+    json["fresh_parts"] = fresh_parts;
     json["frozen_parts_act_on_mean"] = frozen_parts_act_on_mean;
   }
   if (!reward_parts.empty()) json["reward_parts"] = reward_parts;

@@ -60,6 +60,7 @@ struct TrainerConfig {
   std::string init_from;
   std::vector<std::string> train_parts;
   bool train_attention = true;  // with train_parts: their attention maps train too
+  bool fresh_parts = false;      // with train_parts: they start from fresh weights, not the tracker's
   // SessionConfig.reward_parts: the imitation reward averages over these parts' bodies only (empty:
   // every body), e.g. the retrained parts, whose signal the frozen parts' errors would drown.
   std::vector<std::string> reward_parts;

@@ -51,6 +51,7 @@ std::vector<SharedSetting> SharedSettings(const TrainerConfig& c) {
       {"reward_parts", absl::StrJoin(c.reward_parts, ",")},
       {"reward_relative_to_root", Text(c.reward_relative_to_root)},
       {"frozen_parts_act_on_mean", Text(c.frozen_parts_act_on_mean)},
+      {"fresh_parts", Text(c.fresh_parts)},
       {"iterations", Text(c.iterations)},
       {"horizon", Text(c.horizon)},
       {"epochs", Text(c.epochs)},

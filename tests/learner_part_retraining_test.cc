@@ -10,8 +10,10 @@
 
 #include <gmock/gmock.h>
 
+#include "learner/part_retraining.h"
 #include "learner/policy_import.h"
 #include "learner/trainer.h"
+#include "tests/env_specs.h"
 #include "tests/server_fixture.h"
 #include "tests/trainer_test_config.h"
 
@@ -140,6 +142,67 @@ TEST(PartRetrainingTest, ArmsRewardedAndExploringAlone) {
   EXPECT_TRUE(TrainOnlyTheArms(*server, config).has_value());
 }
 
+// With --fresh_parts the arms start as a part new to the tracker: their controllers and attention
+// maps take the initial weights a fresh policy gets, every other part stays the tracker's, and
+// only the arms train.
+TEST(PartRetrainingTest, FreshPartsTakeAFreshPolicysInitialWeights) {
+  const NetworkLayout layout = LayoutFromWireSpec(SpecsOf("5part").wire);
+  auto exported = ReadExportedPolicy(kWalkTracker);
+  ASSERT_TRUE(exported.ok()) << exported.status();
+  const ActionMapping action = exported->spec.action;
+  const std::vector<std::string> arms = {"R_Arm", "L_Arm"};
+  auto kept = LoadTrackerForRetraining(kWalkTracker, arms, "5part", layout, action);
+  ASSERT_TRUE(kept.ok()) << kept.status();
+  torch::manual_seed(11);
+  auto fresh = LoadTrackerForRetraining(kWalkTracker, arms, "5part", layout, action, true, /*fresh_parts=*/true);
+  ASSERT_TRUE(fresh.ok()) << fresh.status();
+  // The same draws as the load above: the tracker's rebuilt policy, then the fresh one.
+  torch::manual_seed(11);
+  const ModSkillPolicy rebuilt(layout, kept->policy->config()), initial(layout, kept->policy->config());
+
+  const auto modules = [](const ModSkillPolicyImpl& policy, int p) -> std::vector<const torch::nn::Module*> {
+    const SkillAttentionImpl& attention = *policy.attention();
+    return {policy.controllers()[p].get(), attention.values()[p].get(), attention.keys()[p].get(),
+            attention.queries()[p].get()};
+  };
+  const auto same = [](const torch::nn::Module& a, const torch::nn::Module& b) {
+    const std::vector<torch::Tensor> x = a.parameters(), y = b.parameters();
+    for (size_t i = 0; i < x.size(); ++i) {
+      if (!torch::equal(x[i], y[i])) return false;
+    }
+    return !x.empty() && x.size() == y.size();
+  };
+  for (size_t p = 0; p < layout.parts.size(); ++p) {
+    const bool arm = IsArm(layout.parts[p].name);
+    const std::vector<const torch::nn::Module*> got = modules(*fresh->policy, p), tracker = modules(*kept->policy, p),
+                                                fresh_start = modules(*initial, p);
+    for (size_t m = 0; m < got.size(); ++m) {
+      EXPECT_EQ(same(*got[m], *tracker[m]), !arm) << layout.parts[p].name << " module " << m;
+      EXPECT_EQ(same(*got[m], *fresh_start[m]), arm) << layout.parts[p].name << " module " << m;
+      for (const torch::Tensor& w : got[m]->parameters()) EXPECT_EQ(w.requires_grad(), arm) << layout.parts[p].name;
+    }
+  }
+  EXPECT_TRUE(torch::equal(fresh->obs_norm->mean(), kept->obs_norm->mean()));
+}
+
+// Resumed, fresh parts continue from the checkpoint's weights, not from fresh ones again.
+TEST(PartRetrainingTest, FreshPartsResumeFromTheCheckpoint) {
+  auto server = StartTestServer();
+  TrainerConfig config = RetrainArms(*server, "fresh_resume");
+  config.fresh_parts = true;
+  std::optional<ArmsRetrained> run = TrainOnlyTheArms(*server, config);
+  ASSERT_TRUE(run.has_value());
+  config.resume = true;
+  config.iterations = 0;  // as far as the first run went: nothing trains
+  auto resumed = Trainer::Create(config);
+  ASSERT_TRUE(resumed.ok()) << resumed.status();
+  ASSERT_TRUE((*resumed)->Run().ok());
+  auto again = ReadExportedPolicy(config.run_dir + "/policy.pt");
+  ASSERT_TRUE(again.ok()) << again.status();
+  ExpectUnchanged(run->after, *again, run->env, {"controller", "key", "query", "value"},
+                  [](const std::string&) { return true; });
+}
+
 TEST(PartRetrainingTest, BadSettingsAreNamed) {
   auto server = StartTestServer();
   TrainerConfig unknown = RetrainArms(*server, "bad");
@@ -173,6 +236,12 @@ TEST(PartRetrainingTest, BadSettingsAreNamed) {
   on_mean.frozen_parts_act_on_mean = true;
   EXPECT_THAT(std::string(Trainer::Create(on_mean).status().message()),
               HasSubstr("--frozen_parts_act_on_mean: only with --train_parts"));
+
+  TrainerConfig fresh_everything = RetrainArms(*server, "bad");
+  fresh_everything.train_parts.clear();
+  fresh_everything.fresh_parts = true;
+  EXPECT_THAT(std::string(Trainer::Create(fresh_everything).status().message()),
+              HasSubstr("--fresh_parts: only with --train_parts"));
 
   // The reward's settings are tracking's: a task run refuses them before any session opens.
   TrainerConfig steer = RetrainArms(*server, "bad");

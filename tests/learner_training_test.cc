@@ -1,6 +1,7 @@
 // The learner end to end against in-process servers: training runs, checkpoints round-trip,
 // the exported policy runs in the server, a dead server does not stop training, and a run
 // with no server fails with a clear message.
+#include <algorithm>
 #include <cstdio>
 #include <functional>
 #include <limits>
@@ -104,6 +105,43 @@ TEST(LearnerTrainingTest, TrainsCheckpointsAndExportsAPolicyTheServerRuns) {
   for (size_t k = 1; k < report->success_at_distance.size(); ++k) {
     EXPECT_LE(report->success_at_distance[k].second, report->success_at_distance[k - 1].second);
   }
+  EXPECT_TRUE(report->tracked_bodies.empty()) << "a tracker watches every body";
+  server->Shutdown(absl::Seconds(1));
+}
+
+// A VR tracking policy (here the open-loop reference, in the VR task's observation) is evaluated
+// on its tracked bodies: their errors beside every body's, and Succ that agrees with the success
+// at 0.5 m (both over the head and hands).
+TEST(LearnerTrainingTest, EvaluationOfAVrPolicyReportsItsTrackedBodies) {
+  auto server = StartTestServer();
+  auto client = ConnectTo(*server);
+  auto spec = client->Describe();
+  ASSERT_TRUE(spec.ok()) << spec.status();
+  const v1::TaskInfo& vr = spec->tasks(4);
+  ASSERT_EQ(vr.name(), "vr_tracking");
+  spec->set_task(vr.name());
+  spec->set_obs_size(spec->self_obs_size() + vr.goal_size());
+  ActionMapping residual;
+  residual.mode = ActionMode::kResidual;
+  auto bytes = AffinePolicyBytes(PolicySpecOf(*spec, residual), {}, {});
+  ASSERT_TRUE(bytes.ok()) << bytes.status();
+  auto report = Evaluate(*client, "vr open loop", *bytes, {"deepmimic_walk", "deepmimic_backflip", "deepmimic_cartwheel"});
+  ASSERT_TRUE(report.ok()) << report.status();
+  EXPECT_THAT(report->tracked_bodies, ::testing::ElementsAre("Head", "L_Hand", "R_Hand"));
+  ASSERT_EQ(report->tracked_body_error_mm.size(), 3u);
+  double mean = 0;
+  for (int k = 0; k < 3; ++k) {
+    const auto body = std::find(report->body_names.begin(), report->body_names.end(), report->tracked_bodies[k]);
+    EXPECT_DOUBLE_EQ(report->tracked_body_error_mm[k], report->body_error_mm[body - report->body_names.begin()]);
+    mean += report->tracked_body_error_mm[k] / 3;
+  }
+  EXPECT_GT(mean, 0);
+  EXPECT_DOUBLE_EQ(report->tracked_g_mpjpe_mm, mean);
+  EXPECT_DOUBLE_EQ(report->success_at_distance[0].second, report->success_rate);
+  const std::string markdown = report->ToMarkdown("vr");
+  EXPECT_THAT(markdown, HasSubstr("| Tracked body | E_g-mpjpe (mm) |"));
+  EXPECT_THAT(markdown, HasSubstr("over the tracked bodies (Head, L_Hand, R_Hand)"));
+  EXPECT_THAT(report->ToJson(), HasSubstr("tracked_g_mpjpe_mm"));
   server->Shutdown(absl::Seconds(1));
 }
 

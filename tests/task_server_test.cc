@@ -1,6 +1,10 @@
 // Task sessions over gRPC: Describe lists the tasks, a session runs one (its spec, goal and
 // reward terms equal the in-process env's), and bad task names or settings are refused naming
 // the field.
+#include <algorithm>
+#include <cmath>
+#include <map>
+
 #include <gmock/gmock.h>
 
 #include "common/wire/tensor_codec.h"
@@ -29,6 +33,9 @@ TEST_F(SimulationServerTest, DescribeListsTheTasks) {
   EXPECT_THAT(spec->tasks(1).reward_terms(), ElementsAre("speed", "facing", "energy"));
   EXPECT_EQ(spec->tasks(3).goal_size(), 15);
   EXPECT_EQ(spec->tasks(4).goal_size(), 72);
+  // VR tracking watches the head and hands only; the others watch every body or none.
+  EXPECT_THAT(spec->tasks(4).tracked_bodies(), ElementsAre("Head", "L_Hand", "R_Hand"));
+  for (int t = 0; t < 4; ++t) EXPECT_EQ(spec->tasks(t).tracked_bodies_size(), 0) << spec->tasks(t).name();
 }
 
 TEST_F(SimulationServerTest, SteerSessionEqualsTheInProcessTaskEnv) {
@@ -167,6 +174,50 @@ TEST_F(SimulationServerTest, RolloutRunsATaskPolicyInItsTask) {
   auto bad = client_->Rollout(request);
   ASSERT_FALSE(bad.ok());
   EXPECT_THAT(std::string(bad.status().message()), HasSubstr("task_settings.max_speed"));
+}
+
+// A VR tracking rollout ends on its tracked bodies' mean error, and reports that mean: each
+// frame's, the clip's largest (so success at stricter distances is the task's too), and success
+// exactly when that largest stays within the 0.5 m of evaluation termination.
+TEST_F(SimulationServerTest, VrRolloutMeasuresTheBodiesItTracks) {
+  auto spec = client_->Describe();
+  ASSERT_TRUE(spec.ok()) << spec.status();
+  std::vector<int> tracked;
+  for (const std::string& body : spec->tasks(4).tracked_bodies()) {
+    tracked.push_back(std::find(spec->body_names().begin(), spec->body_names().end(), body) - spec->body_names().begin());
+  }
+  ASSERT_EQ(tracked.size(), 3u);
+  v1::RolloutRequest request;
+  request.set_checkpoint_bytes(OpenLoopPolicyBytes(TaskKind::kVrTracking));
+  for (const char* clip : {"deepmimic_walk", "deepmimic_backflip", "deepmimic_cartwheel"}) request.add_clips(clip);
+  request.set_termination(v1::EVALUATION);
+  request.set_termination_distance(0.5f);
+  request.set_stream_frames(true);
+  std::map<std::string, double> largest_tracked, largest_every_body;
+  auto metrics = client_->Rollout(request, [&](const v1::RolloutFrame& frame) {
+    std::vector<float> sim, ref;
+    ASSERT_TRUE(ReadFloatTensor(frame.sim_body_pos(), "sim_body_pos", &sim).ok());
+    ASSERT_TRUE(ReadFloatTensor(frame.ref_body_pos(), "ref_body_pos", &ref).ok());
+    const auto distance = [&](int b) {
+      return std::hypot(sim[3 * b] - ref[3 * b], sim[3 * b + 1] - ref[3 * b + 1], sim[3 * b + 2] - ref[3 * b + 2]);
+    };
+    double mean_tracked = 0, mean_every_body = 0;
+    for (int b : tracked) mean_tracked += distance(b) / tracked.size();
+    const int bodies = static_cast<int>(sim.size() / 3);
+    for (int b = 0; b < bodies; ++b) mean_every_body += distance(b) / bodies;
+    EXPECT_NEAR(frame.mean_body_error_m(), mean_tracked, 1e-4);
+    largest_tracked[frame.clip()] = std::max(largest_tracked[frame.clip()], mean_tracked);
+    largest_every_body[frame.clip()] = std::max(largest_every_body[frame.clip()], mean_every_body);
+  });
+  ASSERT_TRUE(metrics.ok()) << metrics.status();
+  ASSERT_EQ(metrics->size(), 3u);
+  bool differs = false;
+  for (const v1::ClipMetrics& clip : *metrics) {
+    EXPECT_NEAR(clip.max_mean_body_error_m(), largest_tracked[clip.clip()], 1e-4) << clip.clip();
+    EXPECT_EQ(clip.success(), clip.max_mean_body_error_m() <= 0.5) << clip.clip();
+    differs |= std::abs(largest_tracked[clip.clip()] - largest_every_body[clip.clip()]) > 0.01;
+  }
+  EXPECT_TRUE(differs) << "the three points' error should not be every body's";
 }
 
 }  // namespace

@@ -39,6 +39,9 @@ int Describe(SimulationClient& client, const std::string& part_layout) {
   for (const v1::TaskInfo& task : spec->tasks()) {
     std::printf("  %-12s goal %3d  reward %s\n      %s\n", task.name().c_str(), task.goal_size(),
                 absl::StrJoin(task.reward_terms(), " + ").c_str(), task.description().c_str());
+    if (task.tracked_bodies_size() > 0) {
+      std::printf("      tracked bodies: %s\n", absl::StrJoin(task.tracked_bodies(), " ").c_str());
+    }
   }
   return 0;
 }

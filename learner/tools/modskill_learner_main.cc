@@ -71,6 +71,9 @@ ABSL_FLAG(std::vector<std::string>, train_parts, {},
 ABSL_FLAG(bool, train_attention, true,
           "with --train_parts: their attention maps train too; false: their controllers alone, so every part's z "
           "stays the tracker's");
+ABSL_FLAG(bool, fresh_parts, false,
+          "with --train_parts: those parts start from fresh weights (a part new to the tracker: its controller, and "
+          "its attention maps when they train), not from the tracker's");
 ABSL_FLAG(bool, frozen_parts_act_on_mean, false,
           "with --train_parts: the frozen parts act on their means (no exploration noise, no share in PPO's ratios), "
           "as they will in evaluation");
@@ -330,6 +333,7 @@ absl::Status TaskFromFlags(TrainerConfig* config) {
   config->reward_relative_to_root = absl::GetFlag(FLAGS_reward_relative_to_root);
   config->frozen_parts_act_on_mean = absl::GetFlag(FLAGS_frozen_parts_act_on_mean);
   config->train_attention = absl::GetFlag(FLAGS_train_attention);
+  config->fresh_parts = absl::GetFlag(FLAGS_fresh_parts);
   if (const std::vector<std::string> hidden = absl::GetFlag(FLAGS_task_hidden); !hidden.empty()) {
     config->model.task_hidden.clear();
     for (const std::string& size : hidden) {

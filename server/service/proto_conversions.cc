@@ -47,6 +47,7 @@ void ToProto(const EnvSpec& spec, const HumanoidModel& humanoid, v1::EnvSpec* ou
     info->set_goal_size(task.goal_size);
     for (const std::string& term : task.reward_terms) info->add_reward_terms(term);
     info->set_description(task.description);
+    for (const std::string& body : task.tracked_bodies) info->add_tracked_bodies(body);
   }
   for (int hinge : spec.action_hinge) {
     out->add_action_offset(static_cast<float>(humanoid.action_offset()[hinge]));

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "absl/strings/str_cat.h"
+#include "server/core/env/task_catalog.h"
 
 namespace modskill {
 namespace {
@@ -58,6 +59,17 @@ ClipRolloutMetrics Measure(const Trajectory& t, const std::string& name, bool su
     m.part_error_mm.push_back(sum / part.bodies.size());
   }
   return m;
+}
+
+// The bodies whose mean distance evaluation termination watches: the task's tracked bodies
+// (vr_tracking's head and hands), or every body.
+std::vector<int> WatchedBodies(const HumanoidModel& humanoid, TaskKind task) {
+  std::vector<int> bodies;
+  for (const std::string& name : TaskInfoOf(task).tracked_bodies) bodies.push_back(humanoid.spec().BodyIndex(name));
+  if (bodies.empty()) {
+    for (int b = 0; b < humanoid.num_bodies(); ++b) bodies.push_back(b);
+  }
+  return bodies;
 }
 
 // How many steps a rollout of `clip` could last: the step limit, or the clip's length in tracking.
@@ -122,6 +134,7 @@ absl::StatusOr<std::vector<ClipRolloutMetrics>> RunRollout(std::shared_ptr<const
   const bool family = !options.family.empty();
   std::vector<FamilyMotionMeter> meters(family ? n : 0, FamilyMotionMeter(humanoid->spec(), batch.spec().control_dt));
   std::vector<double> fitness(n, 0.0);
+  const std::vector<int> watched = WatchedBodies(*humanoid, options.task);
   HumanoidState sim, ref;
   sim.Resize(humanoid->num_bodies(), humanoid->num_hinges());
   ref.Resize(humanoid->num_bodies(), humanoid->num_hinges());
@@ -141,7 +154,7 @@ absl::StatusOr<std::vector<ClipRolloutMetrics>> RunRollout(std::shared_ptr<const
     trajectories[i].sim.push_back(sim.body_pos);
     trajectories[i].ref.push_back(ref.body_pos);
     double mean = 0;
-    for (size_t b = 0; b < sim.body_pos.size(); ++b) mean += (sim.body_pos[b] - ref.body_pos[b]).norm() / sim.body_pos.size();
+    for (int b : watched) mean += (sim.body_pos[b] - ref.body_pos[b]).norm() / watched.size();
     trajectories[i].worst_mean_error = std::max(trajectories[i].worst_mean_error, mean);
     if (on_frame) on_frame({i, batch.env(i).frame(), sim, ref, mean, is_done, is_terminated, z});
   };

@@ -49,7 +49,8 @@ struct ClipRolloutMetrics {
   double vel_error_mm = 0;  // mean |velocity difference|, mm / frame
   std::vector<double> body_error_mm;  // per body, global
   std::vector<double> part_error_mm;  // per part of the layout
-  // Success at stricter termination distances: the largest mean body error seen (m).
+  // Success at stricter termination distances: the largest mean body error seen (m), over the
+  // bodies evaluation termination watches (vr_tracking: its tracked bodies; otherwise all).
   double worst_mean_body_error = 0;
   // The task's reward terms but energy, summed over the rollout and divided by the steps it
   // could have lasted (Table 4's normalized return: 0 worst, 1 best). Tracking: over the clip's
@@ -70,7 +71,7 @@ struct RolloutFrameView {
   int frame = 0;       // the clip's frame
   const HumanoidState& sim;
   const HumanoidState& ref;
-  double mean_body_error = 0;  // m
+  double mean_body_error = 0;  // m, over the bodies evaluation termination watches
   bool done = false;           // the clip's last frame in this rollout
   bool terminated = false;     // done by termination (not at the clip's end)
   // The skill embeddings the policy acted on from this frame (FrameSkills.z_size floats), or

@@ -1,6 +1,7 @@
 #include "server/core/env/task_catalog.h"
 
 #include <cmath>
+#include <iterator>
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
@@ -24,7 +25,8 @@ const std::vector<TaskInfo>& AllTasks() {
       {TaskKind::kVrTracking, "vr_tracking", 24 * kNumVrBodies, {"pos", "rot", "vel", "ang_vel", "energy"},
        "goal = the reference head and hands only (position, rotation, velocity and angular velocity "
        "differences, reference pose; heading frame); imitation reward; success and errors over the "
-       "three bodies"},
+       "three bodies",
+       {std::begin(kVrBodies), std::end(kVrBodies)}},
   };
   return *kTasks;
 }

@@ -23,6 +23,7 @@ struct TaskInfo {
   int goal_size;                          // goal features after the self features (0: tracking)
   std::vector<std::string> reward_terms;  // reward = their sum; "energy" always last
   const char* description;
+  std::vector<std::string> tracked_bodies = {};  // vr_tracking: kVrBodies; the goal and termination watch them
 };
 
 // Every task, tracking first.
