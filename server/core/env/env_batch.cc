@@ -2,9 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
+#include "server/core/env/task_catalog.h"
 #include "server/core/sim/mjcf_builder.h"
 #include "server/core/util/seed_mixing.h"
 
@@ -15,7 +17,9 @@ namespace {
 // the goal tasks' context and the fall check.
 void SetUpTask(EnvContext& context) {
   const HumanoidSpec& body_spec = context.humanoid->spec();
-  for (const char* name : kVrBodies) context.vr_body_ids.push_back(body_spec.BodyIndex(name));
+  for (const std::string& name : TaskInfoOf(TaskKind::kVrTracking).tracked_bodies) {
+    context.vr_body_ids.push_back(body_spec.BodyIndex(name));
+  }
   const std::vector<int> feet = FootBodies(body_spec);
   for (int b = 0; b < context.humanoid->num_bodies(); ++b) {
     const bool foot = std::find(feet.begin(), feet.end(), b) != feet.end();

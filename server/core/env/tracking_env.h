@@ -74,7 +74,7 @@ struct EnvContext {
   // The bodies training termination watches (config.termination_bodies; VR tracking: the head
   // and hands), spec order.
   std::vector<int> termination_body_ids;
-  std::vector<int> vr_body_ids;  // kVrBodies, spec indices
+  std::vector<int> vr_body_ids;  // vr_tracking's TaskInfo::tracked_bodies, spec indices
   GoalTaskContext goal_task;
   std::shared_ptr<const FallDetector> fall_detector;
   std::shared_ptr<const FamilyContext> family;  // family sessions only
