@@ -82,7 +82,7 @@ struct TrainerConfig {
   int horizon = 32;             // steps per env per iteration (PHC)
   // Small preset: 1 epoch and 1 discriminator epoch. The update runs on the cores the servers
   // step on, so its cost per sample bounds end-to-end throughput (bench/learner_throughput_bench:
-  // 5 + 2 epochs gave 0.24 x the server alone, 2 + 1 gave 0.52 x, 1 + 1 0.59 x); with ~80 % of
+  // 5 + 2 epochs gave 0.24 x the server alone, 2 + 1 0.51 x, 1 + 1 0.60 x, medians); with ~80 % of
   // the ratios clipped, a second pass over the batch learned no more per sample on the walk
   // (README, "Learning").
   int epochs = 1;

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <string>
 
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
@@ -17,9 +16,7 @@ namespace {
 // the goal tasks' context and the fall check.
 void SetUpTask(EnvContext& context) {
   const HumanoidSpec& body_spec = context.humanoid->spec();
-  for (const std::string& name : TaskInfoOf(TaskKind::kVrTracking).tracked_bodies) {
-    context.vr_body_ids.push_back(body_spec.BodyIndex(name));
-  }
+  context.vr_body_ids = TrackedBodyIndices(TaskKind::kVrTracking, body_spec);
   const std::vector<int> feet = FootBodies(body_spec);
   for (int b = 0; b < context.humanoid->num_bodies(); ++b) {
     const bool foot = std::find(feet.begin(), feet.end(), b) != feet.end();

@@ -64,8 +64,7 @@ ClipRolloutMetrics Measure(const Trajectory& t, const std::string& name, bool su
 // The bodies whose mean distance evaluation termination watches: the task's tracked bodies
 // (vr_tracking's head and hands), or every body.
 std::vector<int> WatchedBodies(const HumanoidModel& humanoid, TaskKind task) {
-  std::vector<int> bodies;
-  for (const std::string& name : TaskInfoOf(task).tracked_bodies) bodies.push_back(humanoid.spec().BodyIndex(name));
+  std::vector<int> bodies = TrackedBodyIndices(task, humanoid.spec());
   if (bodies.empty()) {
     for (int b = 0; b < humanoid.num_bodies(); ++b) bodies.push_back(b);
   }

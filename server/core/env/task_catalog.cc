@@ -5,6 +5,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
+#include "server/core/sim/humanoid_spec.h"
 
 namespace modskill {
 
@@ -36,6 +37,12 @@ const TaskInfo& TaskInfoOf(TaskKind kind) {
     if (task.kind == kind) return task;
   }
   return AllTasks().front();
+}
+
+std::vector<int> TrackedBodyIndices(TaskKind kind, const HumanoidSpec& spec) {
+  std::vector<int> indices;
+  for (const std::string& name : TaskInfoOf(kind).tracked_bodies) indices.push_back(spec.BodyIndex(name));
+  return indices;
 }
 
 absl::StatusOr<TaskKind> ParseTask(absl::string_view name) {

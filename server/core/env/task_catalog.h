@@ -15,6 +15,8 @@
 
 namespace modskill {
 
+class HumanoidSpec;
+
 enum class TaskKind { kTracking, kSteer, kReach, kStrike, kVrTracking };
 
 struct TaskInfo {
@@ -29,6 +31,9 @@ struct TaskInfo {
 // Every task, tracking first.
 const std::vector<TaskInfo>& AllTasks();
 const TaskInfo& TaskInfoOf(TaskKind kind);
+// The task's tracked bodies as indices into `spec`'s bodies, in TaskInfo order; empty for a task
+// that tracks no subset (every body counts).
+std::vector<int> TrackedBodyIndices(TaskKind kind, const HumanoidSpec& spec);
 // "" and "tracking" are tracking; INVALID_ARGUMENT naming the value and the known tasks otherwise.
 absl::StatusOr<TaskKind> ParseTask(absl::string_view name);
 
