@@ -53,7 +53,7 @@ PpoUpdateStats UpdateWithPpo(ModSkillPolicyImpl& policy, CriticImpl& critic, tor
           ModSkillPolicyImpl::LogProb(policy.SampleMean(obs), log_std, batch.samples.index_select(0, index),
                                       settings.sampled_dims);
       PpoLossTerms loss = ComputePpoLoss(new_log_prob, batch.old_log_prob.index_select(0, index),
-                                         batch.advantages.index_select(0, index), critic.forward(obs),
+                                         batch.advantages.index_select(0, index), critic.NormalizedValue(obs),
                                          batch.old_values.index_select(0, index), batch.returns.index_select(0, index),
                                          settings.clip_ratio, settings.value_clip, settings.value_coefficient);
       const bool finite = std::isfinite(loss.total.item<double>());

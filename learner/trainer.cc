@@ -172,7 +172,7 @@ absl::Status Trainer::BuildNetworks(const v1::EnvSpec& spec) {
     config_.model = skills_->ConfigFor(config_.model);
   }
   policy_ = ModSkillPolicy(layout_, config_.model);
-  critic_ = Critic(layout_.obs_size, config_.model.critic_hidden);
+  critic_ = Critic(layout_.obs_size, config_.model.critic_hidden, config_.normalize_value);
   discriminator_ = AmpDiscriminator(layout_.amp_obs_size, config_.model.discriminator_hidden);
   obs_norm_ = RunningMeanStd(layout_.obs_size);
   amp_norm_ = RunningMeanStd(layout_.amp_obs_size);
@@ -320,7 +320,7 @@ ActingNetworks Trainer::LiveNetworks() { return ActingNetworks{policy_, critic_,
 void Trainer::StartCollection() {
   if (!snapshot_.policy) {
     snapshot_.policy = ModSkillPolicy(layout_, config_.model);
-    snapshot_.critic = Critic(layout_.obs_size, config_.model.critic_hidden);
+    snapshot_.critic = Critic(layout_.obs_size, config_.model.critic_hidden, config_.normalize_value);
     snapshot_.obs_norm = RunningMeanStd(layout_.obs_size);
   }
   CopyModuleState(*policy_, *snapshot_.policy);

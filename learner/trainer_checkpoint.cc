@@ -114,6 +114,12 @@ absl::Status Trainer::RestoreState(const std::string& bytes, const std::string& 
     }
     load_module("policy", *policy_);
     load_module("critic", *critic_);
+    if (critic_->normalizes_returns() != config_.normalize_value) {
+      // The critic's outputs mean what they were trained to mean: the checkpoint decides.
+      LogLine("%s: the critic was trained with --normalize_value=%s; resuming with it", path,
+              critic_->normalizes_returns() ? "true" : "false");
+      config_.normalize_value = critic_->normalizes_returns();
+    }
     load_module("discriminator", *discriminator_);
     load_module("obs_norm", *obs_norm_);
     load_module("amp_norm", *amp_norm_);

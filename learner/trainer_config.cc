@@ -194,6 +194,7 @@ std::string TrainerConfig::ToJson() const {
   json["horizon"] = horizon;
   json["epochs"] = epochs;
   json["minibatch_size"] = minibatch_size;
+  json["normalize_value"] = normalize_value;
   json["learning_rate"] = learning_rate;
   json["gamma"] = gamma;
   json["lambda"] = lambda;

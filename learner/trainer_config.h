@@ -95,6 +95,9 @@ struct TrainerConfig {
   double clip_ratio = 0.2;
   double value_clip = 0.2;
   double value_coefficient = 2.0;
+  // The critic predicts returns normalized by their running statistics (critic.h; rl_games'
+  // normalize_value, on in AMP's, ASE's and PHC's configs).
+  bool normalize_value = false;
   double max_grad_norm = 1.0;
   double task_reward_weight = 0.5;  // PHC: task and AMP rewards 0.5 / 0.5
   double amp_reward_weight = 0.5;

@@ -113,7 +113,14 @@ absl::Status Trainer::UpdatePolicy(const TrainingBatch& batch, IterationStats* s
     if (!steps.ok()) return steps.status();
     settings.minibatches_per_epoch = static_cast<int64_t>(*steps);
   }
-  const PpoBatch ppo{batch.obs, batch.actions, batch.old_log_prob, batch.old_values, batch.advantages, batch.returns};
+  // The critic learns returns in units of their running statistics, these returns included.
+  if (critic_->normalizes_returns()) {
+    if (absl::Status status = UpdateStats(critic_->return_statistics(), batch.returns.unsqueeze(1)); !status.ok()) {
+      return status;
+    }
+  }
+  const PpoBatch ppo{batch.obs, batch.actions, batch.old_log_prob, critic_->NormalizeReturns(batch.old_values),
+                     batch.advantages, critic_->NormalizeReturns(batch.returns)};
   const PpoUpdateStats update = UpdateWithPpo(*policy_, *critic_, *optimizer_, ppo, settings, generator_, Averager());
   if (!update.error.ok()) return update.error;
   stats->skipped_updates += update.skipped_updates;

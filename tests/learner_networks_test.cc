@@ -234,6 +234,54 @@ TEST(LearnerNetworksTest, SaveLoadRoundTrip) {
   EXPECT_TRUE(torch::equal(loaded_disc->forward(amp), disc->forward(amp)));
 }
 
+// Return normalization: the MLP predicts (return - mean) / std of the running return
+// statistics, forward() gives values in reward units, and the mode and statistics survive a save.
+TEST(LearnerNetworksTest, CriticNormalizesReturnsAndRoundTrips) {
+  torch::manual_seed(21);
+  Critic critic(12, std::vector<int64_t>{16}, /*normalize_returns=*/true);
+  ASSERT_TRUE(critic->normalizes_returns());
+  const torch::Tensor returns = torch::randn({500}) * 10 + 50;
+  critic->return_statistics().Update(returns.unsqueeze(1));
+  torch::NoGradGuard no_grad;
+  const torch::Tensor obs = torch::randn({8, 12});
+  const double mean = returns.mean().item<double>(), std = returns.std(/*unbiased=*/false).item<double>();
+  EXPECT_TRUE(torch::allclose(critic->forward(obs), critic->NormalizedValue(obs) * std + mean, 1e-4, 1e-3));
+  EXPECT_TRUE(torch::allclose(critic->NormalizeReturns(returns).mean(), torch::zeros({}), 1e-4, 1e-4));
+  EXPECT_NEAR(critic->NormalizeReturns(returns).std(/*unbiased=*/false).item<double>(), 1.0, 1e-4);
+
+  const std::string path = (std::filesystem::temp_directory_path() / "critic_normalized.pt").string();
+  torch::save(critic, path);
+  Critic loaded(12, std::vector<int64_t>{16});  // built without normalization: the saved mode wins
+  torch::load(loaded, path);
+  EXPECT_TRUE(loaded->normalizes_returns());
+  EXPECT_TRUE(torch::equal(loaded->forward(obs), critic->forward(obs)));
+  std::filesystem::remove(path);
+}
+
+// A critic saved before return normalization (its archive holds the MLP alone) loads as one that
+// predicts raw returns, with the same outputs.
+TEST(LearnerNetworksTest, CriticFromBeforeReturnNormalizationLoadsRaw) {
+  torch::manual_seed(22);
+  Critic old(12, std::vector<int64_t>{16});
+  torch::serialize::OutputArchive archive, mlp;
+  old->named_children()["mlp"]->save(mlp);
+  archive.write("mlp", mlp);
+  std::ostringstream bytes(std::ios::binary);
+  archive.save_to(bytes);
+
+  Critic loaded(12, std::vector<int64_t>{16}, /*normalize_returns=*/true);
+  torch::serialize::InputArchive in;
+  std::istringstream stream(bytes.str(), std::ios::binary);
+  in.load_from(stream);
+  loaded->load(in);
+  EXPECT_FALSE(loaded->normalizes_returns());
+  torch::NoGradGuard no_grad;
+  const torch::Tensor obs = torch::randn({5, 12});
+  EXPECT_TRUE(torch::equal(loaded->forward(obs), old->forward(obs)));
+  const torch::Tensor returns = torch::randn({5}) * 30;
+  EXPECT_TRUE(torch::equal(loaded->NormalizeReturns(returns), returns));
+}
+
 // RunningMeanStd: merging batches gives the statistics of their union.
 TEST(LearnerNetworksTest, RunningMeanStdMergesBatches) {
   torch::manual_seed(6);

@@ -116,6 +116,9 @@ ABSL_FLAG(std::string, termination_bodies, "",
 ABSL_FLAG(std::string, termination_curriculum, "",
           "START:END (m): start loose and tighten toward END as episodes reach their clip's end");
 ABSL_FLAG(int, update_threads, 2, "torch threads for the updates, while the servers wait (0: as --threads)");
+ABSL_FLAG(bool, normalize_value, false,
+          "the critic predicts returns normalized by their running mean and std (rl_games' normalize_value); a "
+          "resumed run keeps its checkpoint's setting");
 ABSL_FLAG(bool, collect_during_update, false,
           "collect the next batch while the update runs, with the weights from before it (policy lag 1)");
 ABSL_FLAG(uint64_t, seed, 1, "random seed");
@@ -395,6 +398,7 @@ absl::StatusOr<TrainerConfig> ConfigFromFlags(const std::string& token) {
   }
   config->update_threads = absl::GetFlag(FLAGS_update_threads);
   config->collect_during_update = absl::GetFlag(FLAGS_collect_during_update);
+  config->normalize_value = absl::GetFlag(FLAGS_normalize_value);
   config->seed = absl::GetFlag(FLAGS_seed);
   config->checkpoint_every = absl::GetFlag(FLAGS_checkpoint_every);
   config->report_every = absl::GetFlag(FLAGS_report_every);
