@@ -2,6 +2,7 @@
 // the exported policy runs in the server, a dead server does not stop training, and a run
 // with no server fails with a clear message.
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <functional>
 #include <limits>
@@ -198,6 +199,37 @@ TEST(LearnerTrainingTest, CheckpointRoundTripAndResume) {
   ASSERT_TRUE(other.ok());
   ASSERT_TRUE((*other)->Run().ok());
   EXPECT_FALSE((*resumed)->LoadCheckpoint(RunDir("three") + "/checkpoint.pt").ok());
+  server->Shutdown(absl::Seconds(1));
+}
+
+// --normalize_value: the critic learns returns in units of their running statistics, which the
+// update fills; a resumed run keeps the checkpoint's mode whatever the flag says, so its critic's
+// outputs keep their meaning.
+TEST(LearnerTrainingTest, NormalizedValueTrainsAndResumesInItsMode) {
+  auto server = StartTestServer();
+  const std::string dir = RunDir("normalize_value");
+  TrainerConfig config = SmallConfig({server->port()}, dir);
+  config.normalize_value = true;
+  auto first = Trainer::Create(config);
+  ASSERT_TRUE(first.ok()) << first.status();
+  std::vector<double> value_losses;
+  ASSERT_TRUE((*first)->Run([&](const IterationStats& stats) { value_losses.push_back(stats.value_loss); }).ok());
+  ASSERT_TRUE((*first)->critic()->normalizes_returns());
+  RunningMeanStdImpl& returns = (*first)->critic()->return_statistics();
+  EXPECT_GT(returns.count().item<double>(), 0);
+  EXPECT_GT(returns.mean().item<double>(), 0) << "imitation rewards are positive";
+  for (double loss : value_losses) EXPECT_TRUE(std::isfinite(loss));
+  const torch::Tensor probe = (*first)->obs_norm()->Normalize(torch::randn({4, 934}));
+  const torch::Tensor before = (*first)->critic()->forward(probe).detach();
+
+  config.resume = true;
+  config.normalize_value = false;
+  config.iterations = 1;
+  auto resumed = Trainer::Create(config);
+  ASSERT_TRUE(resumed.ok()) << resumed.status();
+  EXPECT_TRUE((*resumed)->critic()->normalizes_returns());
+  EXPECT_TRUE((*resumed)->config().normalize_value);
+  EXPECT_TRUE(torch::equal((*resumed)->critic()->forward(probe).detach(), before));
   server->Shutdown(absl::Seconds(1));
 }
 
