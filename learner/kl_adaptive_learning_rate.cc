@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "learner/learning_rate_decay.h"
+
 namespace modskill::learner {
 
 KlAdaptiveLearningRate::KlAdaptiveLearningRate(double rate, double target_kl)
@@ -16,11 +18,7 @@ double KlAdaptiveLearningRate::Update(double kl) {
   return rate_;
 }
 
-void KlAdaptiveLearningRate::ApplyTo(torch::optim::Adam& optimizer) const {
-  for (torch::optim::OptimizerParamGroup& group : optimizer.param_groups()) {
-    static_cast<torch::optim::AdamOptions&>(group.options()).lr(rate_);
-  }
-}
+void KlAdaptiveLearningRate::ApplyTo(torch::optim::Adam& optimizer) const { SetLearningRate(optimizer, rate_); }
 
 torch::Tensor EstimateKl(const torch::Tensor& log_probs, const torch::Tensor& old_log_probs) {
   torch::NoGradGuard no_grad;

@@ -45,6 +45,7 @@ struct IterationStats {
   double mean_episode_return = 0;  // task reward, episodes completed recently
   double mean_episode_length = 0;
   double reward_terms[8] = {};
+  double learning_rate = 0;  // the policy and critic step size of this iteration's update
   double policy_loss = 0, value_loss = 0, approx_kl = 0, clip_fraction = 0;
   double discriminator_loss = 0, expert_logit = 0, policy_logit = 0, gradient_penalty = 0;
   int live_sessions = 0;

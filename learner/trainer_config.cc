@@ -119,6 +119,10 @@ absl::Status TrainerConfig::Validate() const {
   if (epochs < 1) return bad("epochs", epochs, "must be >= 1");
   if (minibatch_size < 1) return bad("minibatch_size", minibatch_size, "must be >= 1");
   if (!(learning_rate > 0 && learning_rate < 1)) return bad("learning_rate", learning_rate, "must be in (0, 1)");
+  if (learning_rate_decay_steps < 0) return bad("learning_rate_decay_steps", learning_rate_decay_steps, "must be >= 0");
+  if (!(learning_rate_floor > 0 && learning_rate_floor <= 1)) {
+    return bad("learning_rate_floor", learning_rate_floor, "must be in (0, 1]");
+  }
   if (!(gamma > 0 && gamma <= 1)) return bad("gamma", gamma, "must be in (0, 1]");
   if (!(lambda >= 0 && lambda <= 1)) return bad("lambda", lambda, "must be in [0, 1]");
   if (amp_samples < 1) return bad("amp_samples", amp_samples, "must be >= 1");
@@ -196,6 +200,8 @@ std::string TrainerConfig::ToJson() const {
   json["minibatch_size"] = minibatch_size;
   json["normalize_value"] = normalize_value;
   json["learning_rate"] = learning_rate;
+  json["learning_rate_decay_steps"] = learning_rate_decay_steps;
+  json["learning_rate_floor"] = learning_rate_floor;
   json["gamma"] = gamma;
   json["lambda"] = lambda;
   json["clip_ratio"] = clip_ratio;

@@ -57,6 +57,8 @@ std::vector<SharedSetting> SharedSettings(const TrainerConfig& c) {
       {"epochs", Text(c.epochs)},
       {"minibatch_size", Text(c.minibatch_size)},
       {"learning_rate", Text(c.learning_rate)},
+      {"learning_rate_decay_steps", Text(c.learning_rate_decay_steps)},
+      {"learning_rate_floor", Text(c.learning_rate_floor)},
       {"gamma", Text(c.gamma)},
       {"lambda", Text(c.lambda)},
       {"clip_ratio", Text(c.clip_ratio)},

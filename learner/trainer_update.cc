@@ -8,6 +8,7 @@
 #include "common/log.h"
 #include "learner/amp_loss.h"
 #include "learner/gae.h"
+#include "learner/learning_rate_decay.h"
 #include "learner/ppo_loss.h"
 #include "learner/ppo_update.h"
 #include "learner/trainer.h"
@@ -99,6 +100,11 @@ torch::Tensor Trainer::SampleLiveAmp(const std::vector<torch::Tensor>& amp_rows,
 // PPO (ppo_update.h). Iterate gives the update phases config.update_threads torch threads while
 // the servers wait.
 absl::Status Trainer::UpdatePolicy(const TrainingBatch& batch, IterationStats* stats) {
+  // env_steps_ counts every rank's steps, so data-parallel ranks step alike.
+  stats->learning_rate =
+      LearningRateDecay{config_.learning_rate, config_.learning_rate_decay_steps, config_.learning_rate_floor}.RateAt(
+          env_steps_);
+  SetLearningRate(*optimizer_, stats->learning_rate);
   PpoSettings settings;
   settings.epochs = config_.epochs;
   settings.minibatch_size = config_.minibatch_size;

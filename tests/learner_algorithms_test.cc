@@ -20,6 +20,7 @@
 #include "learner/amp_loss.h"
 #include "learner/gae.h"
 #include "learner/kl_adaptive_learning_rate.h"
+#include "learner/learning_rate_decay.h"
 #include "learner/ppo_loss.h"
 #include "learner/tensorboard_writer.h"
 #include "learner/termination_curriculum.h"
@@ -222,6 +223,22 @@ TEST(KlAdaptiveLearningRateTest, StepsDownOnLargeKlUpOnSmallAndStaysInBounds) {
   rate.set_rate(2e-5);
   rate.ApplyTo(adam);
   EXPECT_DOUBLE_EQ(static_cast<torch::optim::AdamOptions&>(adam.param_groups()[0].options()).lr(), 2e-5);
+}
+
+TEST(LearningRateDecayTest, FallsLinearlyToItsFloorAndStaysThere) {
+  const LearningRateDecay decay{2e-4, 1000, 0.1};
+  EXPECT_DOUBLE_EQ(decay.RateAt(0), 2e-4);
+  EXPECT_NEAR(decay.RateAt(500), 2e-4 * 0.55, 1e-15);  // halfway from 1 to 0.1
+  EXPECT_NEAR(decay.RateAt(1000), 2e-5, 1e-15);
+  EXPECT_NEAR(decay.RateAt(50000), 2e-5, 1e-15);
+  EXPECT_DOUBLE_EQ(decay.RateAt(-5), 2e-4);
+  const LearningRateDecay constant{2e-4, 0, 0.1};
+  EXPECT_DOUBLE_EQ(constant.RateAt(1'000'000'000), 2e-4);
+
+  torch::Tensor weight = torch::zeros({2}, torch::requires_grad());
+  torch::optim::Adam adam({weight}, torch::optim::AdamOptions(1e-3));
+  SetLearningRate(adam, decay.RateAt(500));
+  EXPECT_DOUBLE_EQ(static_cast<torch::optim::AdamOptions&>(adam.param_groups()[0].options()).lr(), decay.RateAt(500));
 }
 
 TEST(KlAdaptiveLearningRateTest, KlEstimateIsHandComputedAndNeverNegative) {

@@ -15,6 +15,7 @@
 #include "common/atomic_file.h"
 #include "common/policy/policy_checkpoint.h"
 #include "learner/evaluation.h"
+#include "learner/learning_rate_decay.h"
 #include "learner/skill_library.h"
 #include "learner/task_evaluation.h"
 #include "learner/trainer.h"
@@ -233,6 +234,37 @@ TEST(LearnerTrainingTest, NormalizedValueTrainsAndResumesInItsMode) {
   server->Shutdown(absl::Seconds(1));
 }
 
+// --learning_rate_decay_steps: each update's step size follows the env steps before it, down to
+// the floor, and a resumed run continues the decay where its checkpoint's steps left it.
+TEST(LearnerTrainingTest, LearningRateDecaysOverEnvStepsAcrossAResume) {
+  auto server = StartTestServer();
+  TrainerConfig config = SmallConfig({server->port()}, RunDir("learning_rate_decay"));
+  config.iterations = 2;
+  config.learning_rate = 2e-4;
+  config.learning_rate_floor = 0.25;
+  const int64_t per_iteration = static_cast<int64_t>(config.envs_per_server) * config.horizon;
+  config.learning_rate_decay_steps = 2 * per_iteration;
+  const LearningRateDecay decay{2e-4, config.learning_rate_decay_steps, 0.25};
+  std::vector<IterationStats> history;
+  auto first = Trainer::Create(config);
+  ASSERT_TRUE(first.ok()) << first.status();
+  ASSERT_TRUE((*first)->Run([&](const IterationStats& stats) { history.push_back(stats); }).ok());
+  config.resume = true;
+  auto resumed = Trainer::Create(config);
+  ASSERT_TRUE(resumed.ok()) << resumed.status();
+  ASSERT_TRUE((*resumed)->Run([&](const IterationStats& stats) { history.push_back(stats); }).ok());
+  ASSERT_EQ(history.size(), 4u);
+  int64_t steps_before = 0;
+  for (const IterationStats& stats : history) {
+    EXPECT_NEAR(stats.learning_rate, decay.RateAt(steps_before), 1e-12) << "iteration " << stats.iteration;
+    steps_before = stats.env_steps;
+  }
+  EXPECT_DOUBLE_EQ(history[0].learning_rate, 2e-4);
+  EXPECT_LT(history[1].learning_rate, history[0].learning_rate);
+  EXPECT_NEAR(history[3].learning_rate, 5e-5, 1e-12) << "past decay_steps the floor holds";
+  server->Shutdown(absl::Seconds(1));
+}
+
 class ServerFailoverTest : public ::testing::TestWithParam<bool> {};
 
 // Both collection modes: sequential, and collecting on its own thread during the update (where a
@@ -334,6 +366,10 @@ TEST(LearnerTrainingTest, BadConfigurationsAreClearErrors) {
       {[](TrainerConfig* c) { c->termination_distance = 0; }, "--termination_distance"},
       {[](TrainerConfig* c) { c->termination_distance = 150; }, "--termination_distance"},
       {[](TrainerConfig* c) { c->termination_bodies = "toes"; }, "--termination_bodies"},
+      {[](TrainerConfig* c) { c->learning_rate_decay_steps = -1; }, "--learning_rate_decay_steps"},
+      {[](TrainerConfig* c) { c->learning_rate_floor = 0; }, "--learning_rate_floor"},
+      {[](TrainerConfig* c) { c->learning_rate_floor = 1.5; }, "--learning_rate_floor"},
+      {[&](TrainerConfig* c) { c->learning_rate_floor = nan; }, "--learning_rate_floor"},
       {[](TrainerConfig* c) { c->curriculum_start = 0.25, c->curriculum_end = 1.0; }, "--termination_curriculum"},
       {[&](TrainerConfig* c) { c->curriculum_start = nan, c->curriculum_end = 0.25; }, "--termination_curriculum"},
       {[](TrainerConfig* c) {

@@ -105,6 +105,10 @@ ABSL_FLAG(int, epochs, 0, "PPO epochs per iteration (0: the preset's)");
 ABSL_FLAG(int, minibatch_size, 0, "PPO minibatch (0: the preset's)");
 ABSL_FLAG(int, discriminator_epochs, 0, "AMP discriminator epochs per iteration (0: the preset's)");
 ABSL_FLAG(double, learning_rate, 0, "Adam learning rate (0: the preset's)");
+ABSL_FLAG(double, learning_rate_decay_steps, 0,
+          "decay --learning_rate linearly to --learning_rate_floor x it over this many env steps, e.g. 1.6e6 "
+          "(0: constant)");
+ABSL_FLAG(double, learning_rate_floor, 0.1, "the decayed learning rate's final fraction of --learning_rate, in (0, 1]");
 ABSL_FLAG(double, log_std, 0, "fixed log standard deviation of the Gaussian policy (0: the preset's)");
 ABSL_FLAG(double, amp_reward_weight, 0.5, "weight of the AMP style reward (task: 1 - this)");
 ABSL_FLAG(std::string, action_mode, "", "absolute (PD target = offset + scale * a, the paper's) or residual "
@@ -379,6 +383,13 @@ absl::StatusOr<TrainerConfig> ConfigFromFlags(const std::string& token) {
   if (absl::GetFlag(FLAGS_discriminator_epochs) > 0) config->discriminator_epochs = absl::GetFlag(FLAGS_discriminator_epochs);
   if (absl::GetFlag(FLAGS_minibatch_size) > 0) config->minibatch_size = absl::GetFlag(FLAGS_minibatch_size);
   if (absl::GetFlag(FLAGS_learning_rate) > 0) config->learning_rate = absl::GetFlag(FLAGS_learning_rate);
+  const double decay_steps = absl::GetFlag(FLAGS_learning_rate_decay_steps);
+  if (!(decay_steps >= 0 && decay_steps < 1e15)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--learning_rate_decay_steps: ", decay_steps, " is not a step count >= 0"));
+  }
+  config->learning_rate_decay_steps = static_cast<int64_t>(decay_steps);
+  config->learning_rate_floor = absl::GetFlag(FLAGS_learning_rate_floor);
   if (absl::GetFlag(FLAGS_log_std) != 0) config->model.log_std = absl::GetFlag(FLAGS_log_std);
   const double amp_weight = absl::GetFlag(FLAGS_amp_reward_weight);
   if (!(amp_weight >= 0 && amp_weight <= 1)) return absl::InvalidArgumentError("--amp_reward_weight must be in [0, 1]");
@@ -429,7 +440,7 @@ std::vector<std::string> ProgressColumns(const Trainer& trainer) {
   for (const char* column : {"policy_loss", "value_loss", "approx_kl", "clip_fraction", "discriminator_loss",
                              "expert_logit", "policy_logit", "gradient_penalty", "live_sessions", "wall_seconds",
                              "termination_distance", "tracked_share", "collect_seconds", "update_seconds",
-                             "policy_lag"}) {
+                             "policy_lag", "learning_rate"}) {
     columns.push_back(column);
   }
   if (!IsTrackingTask(trainer.config().task)) columns.push_back("normalized_return");
@@ -445,7 +456,7 @@ std::vector<double> ProgressRow(const IterationStats& s, double elapsed, const T
   row.insert(row.end(), {s.policy_loss, s.value_loss, s.approx_kl, s.clip_fraction, s.discriminator_loss,
                          s.expert_logit, s.policy_logit, s.gradient_penalty, double(s.live_sessions), elapsed,
                          s.termination_distance, s.tracked_share, s.collect_seconds, s.update_seconds,
-                         double(s.policy_lag)});
+                         double(s.policy_lag), s.learning_rate});
   if (!IsTrackingTask(trainer.config().task)) row.push_back(s.normalized_return);
   if (trainer.config().data_parallel.world_size > 1) row.insert(row.end(), {s.allreduce_seconds, double(s.allreduce_bytes)});
   return row;
@@ -463,12 +474,12 @@ void PrintIteration(const IterationStats& s, const Trainer& trainer, int last, d
                                                  s.task_episodes);
   std::printf(
       "it %4d/%d | %9lld steps %5.0f/s | reward %.3f amp %.3f | return %6.2f len %5.1f | %s%s | "
-      "pi %+.4f v %.4f kl %.4f clip %.3f | "
+      "pi %+.4f v %.4f kl %.4f clip %.3f lr %.1e | "
       "D %.3f (expert %+.2f policy %+.2f) | term %.2fm tracked %.2f | sessions %d | collect %.1fs update %.1fs lag %d | "
       "left %s\n",
       s.iteration, last, static_cast<long long>(s.env_steps), s.env_steps_per_second, s.mean_task_reward,
       s.mean_amp_reward, s.mean_episode_return, s.mean_episode_length, task.c_str(), terms.c_str(), s.policy_loss,
-      s.value_loss, s.approx_kl, s.clip_fraction, s.discriminator_loss, s.expert_logit, s.policy_logit,
+      s.value_loss, s.approx_kl, s.clip_fraction, s.learning_rate, s.discriminator_loss, s.expert_logit, s.policy_logit,
       s.termination_distance, s.tracked_share, s.live_sessions, s.collect_seconds, s.update_seconds, s.policy_lag,
       absl::FormatDuration(absl::Seconds(std::round(left))).c_str());
   std::fflush(stdout);
