@@ -105,9 +105,8 @@ ABSL_FLAG(int, epochs, 0, "PPO epochs per iteration (0: the preset's)");
 ABSL_FLAG(int, minibatch_size, 0, "PPO minibatch (0: the preset's)");
 ABSL_FLAG(int, discriminator_epochs, 0, "AMP discriminator epochs per iteration (0: the preset's)");
 ABSL_FLAG(double, learning_rate, 0, "Adam learning rate (0: the preset's)");
-ABSL_FLAG(double, learning_rate_decay_steps, 0,
-          "decay --learning_rate linearly to --learning_rate_floor x it over this many env steps, e.g. 1.6e6 "
-          "(0: constant)");
+ABSL_FLAG(int64_t, learning_rate_decay_steps, 0,
+          "decay --learning_rate linearly to --learning_rate_floor x it over this many env steps (0: constant)");
 ABSL_FLAG(double, learning_rate_floor, 0.1, "the decayed learning rate's final fraction of --learning_rate, in (0, 1]");
 ABSL_FLAG(double, log_std, 0, "fixed log standard deviation of the Gaussian policy (0: the preset's)");
 ABSL_FLAG(double, amp_reward_weight, 0.5, "weight of the AMP style reward (task: 1 - this)");
@@ -383,12 +382,7 @@ absl::StatusOr<TrainerConfig> ConfigFromFlags(const std::string& token) {
   if (absl::GetFlag(FLAGS_discriminator_epochs) > 0) config->discriminator_epochs = absl::GetFlag(FLAGS_discriminator_epochs);
   if (absl::GetFlag(FLAGS_minibatch_size) > 0) config->minibatch_size = absl::GetFlag(FLAGS_minibatch_size);
   if (absl::GetFlag(FLAGS_learning_rate) > 0) config->learning_rate = absl::GetFlag(FLAGS_learning_rate);
-  const double decay_steps = absl::GetFlag(FLAGS_learning_rate_decay_steps);
-  if (!(decay_steps >= 0 && decay_steps < 1e15)) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("--learning_rate_decay_steps: ", decay_steps, " is not a step count >= 0"));
-  }
-  config->learning_rate_decay_steps = static_cast<int64_t>(decay_steps);
+  config->learning_rate_decay_steps = absl::GetFlag(FLAGS_learning_rate_decay_steps);
   config->learning_rate_floor = absl::GetFlag(FLAGS_learning_rate_floor);
   if (absl::GetFlag(FLAGS_log_std) != 0) config->model.log_std = absl::GetFlag(FLAGS_log_std);
   const double amp_weight = absl::GetFlag(FLAGS_amp_reward_weight);
