@@ -1,8 +1,8 @@
 // The PPO step size decayed linearly over env steps (the anneal of Schulman et al. 2017's Atari
 // runs, Stable-Baselines3's linear schedule): learning_rate at step 0, learning_rate x
-// floor_fraction from decay_steps on. Late in a run a constant step keeps moving a policy that is
-// near its optimum, where the advantage is mostly noise; a decayed one settles.
-// decay_steps == 0 keeps the rate constant.
+// floor_fraction from decay_steps on, so that late updates move a policy near its optimum less.
+// On the walk at 1.64 M steps it cost training reward and did not steady the evaluation (README,
+// "Learning"): off by default. decay_steps == 0 keeps the rate constant.
 #ifndef MODSKILL_LEARNER_LEARNING_RATE_DECAY_H_
 #define MODSKILL_LEARNER_LEARNING_RATE_DECAY_H_
 
