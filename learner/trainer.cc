@@ -120,6 +120,7 @@ ServerPoolOptions Trainer::PoolOptions() const {
   pool.session.set_termination_bodies(ToWire(TerminationBodiesOf(config)));
   pool.session.set_amp_obs(v1::FULL);
   pool.session.set_loop_clips(config.loop_clips);
+  pool.session.set_anchor_reference(config.anchor_reference);
   for (const std::string& part : config.reward_parts) pool.session.add_reward_parts(part);
   pool.session.set_reward_relative_to_root(config.reward_relative_to_root);
   if (!IsTrackingTask(config.task)) {

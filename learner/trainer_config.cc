@@ -41,7 +41,8 @@ absl::Status ValidateTask(const TrainerConfig& c) {
   const std::pair<const char*, bool> tracking_only[] = {
       {"--reward_parts", !c.reward_parts.empty()},
       {"--reward_relative_to_root", c.reward_relative_to_root},
-      {"--loop_clips", c.loop_clips}};
+      {"--loop_clips", c.loop_clips},
+      {"--anchor_reference", c.anchor_reference}};
   for (const auto& [flag, given] : tracking_only) {
     if (given && !IsTrackingTask(c.task)) {
       return absl::InvalidArgumentError(absl::StrCat(flag, ": tracking only, not with --task ", c.task));
@@ -220,6 +221,7 @@ std::string TrainerConfig::ToJson() const {
   json["termination_curriculum"] = {curriculum_start, curriculum_end};
   json["task"] = task;
   json["loop_clips"] = loop_clips;
+  json["anchor_reference"] = anchor_reference;
   if (!init_from.empty()) {
     json["init_from"] = init_from;
     json["train_parts"] = train_parts;

@@ -73,6 +73,10 @@ struct TrainerConfig {
   // Tracking: clips loop (SessionConfig.loop_clips), so that episodes run 300 steps through the
   // clip's seams, as a task's looping base motion later asks of the skills.
   bool loop_clips = false;
+  // Tracking: the reference is carried onto the character each step (SessionConfig.anchor_reference),
+  // as a task's base motion will be: the skills learn to go on from where they are, not to win
+  // back drift.
+  bool anchor_reference = false;
   // SessionConfig.task_settings; 0 in a field: the server's default.
   double task_min_speed = 0, task_max_speed = 0, task_min_goal_interval_s = 0, task_max_goal_interval_s = 0;
 

@@ -256,6 +256,11 @@ TEST(PartRetrainingTest, BadSettingsAreNamed) {
   steer.reward_parts = {"R_Arm"};
   EXPECT_THAT(std::string(Trainer::Create(steer).status().message()),
               HasSubstr("--reward_parts: tracking only, not with --task steer"));
+  steer.reward_parts.clear();
+  steer.reward_relative_to_root = false;
+  steer.anchor_reference = true;  // a task anchors its base motion itself
+  EXPECT_THAT(std::string(Trainer::Create(steer).status().message()),
+              HasSubstr("--anchor_reference: tracking only, not with --task steer"));
 
   // An unknown reward part is the server's refusal, named, at once (not after --server_timeout_s).
   TrainerConfig tail = RetrainArms(*server, "bad");

@@ -116,6 +116,17 @@ TEST_F(SimulationServerTest, BadTasksAreRejectedNamingTheField) {
   config.set_task("steer");
   config.set_loop_clips(true);
   cases.push_back({config, "loop_clips: tracking only"});
+  config = Config(2);
+  config.set_task("vr_tracking");
+  config.set_anchor_reference(true);
+  cases.push_back({config, "anchor_reference: tracking only"});
+  config = Config(2);
+  config.set_anchor_reference(true);
+  v1::FamilyParameterRange* gravity = config.mutable_family()->add_params();
+  gravity->set_name("gravity");
+  gravity->set_lo(5);
+  gravity->set_hi(9);
+  cases.push_back({config, "anchor_reference: not for a family session"});
   for (const Case& c : cases) {
     auto stream = client_->OpenSession(c.config);
     ASSERT_FALSE(stream.ok()) << c.message;

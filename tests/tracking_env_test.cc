@@ -1,5 +1,6 @@
 // The tracking env and the batch: reference state initialization, observation layout, reward,
 // termination, determinism and bad input.
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -209,6 +210,41 @@ TEST(TrackingEnvTest, LoopingClipGoesOnFromItsLastFrameUntilTheStepLimit) {
   ASSERT_TRUE(batch->Step(ReferenceActions(*batch)).ok());
   EXPECT_EQ(batch->buffers().done[0], 1);
   EXPECT_EQ(batch->buffers().truncated[0], 1) << "ended by the step limit";
+}
+
+// SessionConfig.anchor_reference: each step the reference is carried onto the character, as a
+// goal task's base motion is. The open-loop reference's character drifts off the walk and falls;
+// anchored, the next reference root stays one frame's travel away and the errors leave out the
+// drift, where the unanchored reference walks on without it.
+TEST(TrackingEnvTest, AnchoredReferenceGoesOnFromWhereTheCharacterIs) {
+  struct Run {
+    float farthest_root_gap = 0;  // next reference root to the character, horizontal (m)
+    float last_mean_error = 0;
+  };
+  auto run = [](bool anchored) {
+    EnvBatchConfig config = SmallConfig(1);
+    config.env.termination = TerminationMode::kNone;
+    config.env.loop_clips = true;
+    config.env.anchor_reference = anchored;
+    auto batch = MakeBatch(config);
+    batch->env(0).ResetTo(batch->motions().Find("deepmimic_walk"), 0, batch->row(0));
+    const int root_dpos = batch->spec().body_obs_start[0] + kSelfFeaturesRoot;
+    Run result;
+    for (int s = 0; s < 60; ++s) {
+      EXPECT_TRUE(batch->Step(ReferenceActions(*batch)).ok());
+      EXPECT_EQ(batch->buffers().done[0], 0) << s;
+      const float* dpos = &batch->buffers().obs[root_dpos];
+      result.farthest_root_gap = std::max(result.farthest_root_gap, std::hypot(dpos[0], dpos[1]));
+    }
+    result.last_mean_error = batch->buffers().mean_body_error[0];
+    return result;
+  };
+  const Run anchored = run(true), global = run(false);
+  EXPECT_LT(anchored.farthest_root_gap, 0.1) << "one frame of a walk is ~4 cm";
+  EXPECT_GT(global.farthest_root_gap, 0.5) << "the unanchored walk leaves the fallen character behind";
+  // The errors measure against the carried reference: the drift is not in them (the open-loop
+  // character has fallen by step 60: 1.0 m anchored, 1.3 m unanchored).
+  EXPECT_LT(anchored.last_mean_error, global.last_mean_error - 0.1);
 }
 
 TEST(BaseMotionAnchorTest, PlanarMotionsComposeAndACycleMovesTheFirstFrameOntoTheLast) {

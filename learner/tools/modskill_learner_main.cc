@@ -86,6 +86,9 @@ ABSL_FLAG(bool, reward_relative_to_root, false,
 ABSL_FLAG(bool, loop_clips, false,
           "tracking: clips loop (on at frame 1, carried by their own displacement) and episodes run 300 steps, so "
           "the skills learn to go on as a task's looping base motion asks");
+ABSL_FLAG(bool, anchor_reference, false,
+          "tracking: each step the reference is carried onto the character's root and heading, as a task's base "
+          "motion is, so the skills learn to go on from where they are instead of winning back drift");
 ABSL_FLAG(double, task_log_std, -2.9, "--task: fixed log standard deviation of the task policy in z space");
 ABSL_FLAG(bool, task_skill_prior, true,
           "--task steer|reach|strike: z = normalize(z_prior + task head), z_prior from the tracker's frozen attention on "
@@ -333,6 +336,7 @@ absl::Status TaskFromFlags(TrainerConfig* config) {
   config->model.task_log_std = absl::GetFlag(FLAGS_task_log_std);
   config->model.task_skill_prior = absl::GetFlag(FLAGS_task_skill_prior);
   config->loop_clips = absl::GetFlag(FLAGS_loop_clips);
+  config->anchor_reference = absl::GetFlag(FLAGS_anchor_reference);
   config->init_from = absl::GetFlag(FLAGS_init_from);
   config->train_parts = absl::GetFlag(FLAGS_train_parts);
   config->reward_parts = absl::GetFlag(FLAGS_reward_parts);

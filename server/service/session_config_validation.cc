@@ -124,6 +124,13 @@ absl::StatusOr<SessionSettings> ParseSessionConfig(const v1::SessionConfig& conf
     return absl::InvalidArgumentError(absl::StrCat("loop_clips: tracking only; task ", TaskInfoOf(*task).name,
                                                    " has its own episode ends"));
   }
+  if (config.anchor_reference() && *task != TaskKind::kTracking) {
+    return absl::InvalidArgumentError(absl::StrCat("anchor_reference: tracking only; task ", TaskInfoOf(*task).name,
+                                                   " does not track a reference"));
+  }
+  if (config.anchor_reference() && config.family().params_size() > 0) {
+    return absl::InvalidArgumentError("anchor_reference: not for a family session (its clip is tracked where it is)");
+  }
   auto family_ranges = ToFamilyRanges(config, action_mapping->mode, *task);
   if (!family_ranges.ok()) return family_ranges.status();
   auto reward_bodies = ToRewardBodies(config.reward_parts(), *layout, *task);
@@ -150,6 +157,7 @@ absl::StatusOr<SessionSettings> ParseSessionConfig(const v1::SessionConfig& conf
   settings.env.task = *task;
   settings.env.task_settings = *task_settings;
   settings.env.loop_clips = config.loop_clips();
+  settings.env.anchor_reference = config.anchor_reference();
   settings.env.family = *std::move(family_ranges);
   settings.env.reward.bodies = *std::move(reward_bodies);
   settings.env.reward.relative_to_root = config.reward_relative_to_root();

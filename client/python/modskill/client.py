@@ -379,7 +379,8 @@ class Client:
                 termination_bodies: Union[str, int] = "all", task: str = "",
                 task_settings: Optional[Mapping[str, float]] = None, loop_clips: bool = False,
                 family: Optional[Mapping[str, Union[float, Tuple[float, float]]]] = None,
-                reward_parts: Sequence[str] = (), reward_relative_to_root: bool = False) -> "Session":
+                reward_parts: Sequence[str] = (), reward_relative_to_root: bool = False,
+                anchor_reference: bool = False) -> "Session":
         """Opens a simulation session of ``num_envs`` envs and returns it once the server has
         reset them (``Session.initial`` holds the first observations).
 
@@ -414,6 +415,9 @@ class Client:
             Termination and the errors still use every body.
           reward_relative_to_root: tracking only: the reward compares the rewarded bodies in the
             root's frame, so the root's drift stays out of a part's reward.
+          anchor_reference: tracking only: each step the reference's next frame is carried onto
+            the character's root and heading (as a goal task's base motion is), so the reward and
+            termination ask the character to go on from where it is, not to win back drift.
 
         Use it as a context manager (or call ``close()``) so that the server frees the envs.
         """
@@ -433,7 +437,8 @@ class Client:
                                   task=task, task_settings=pb.TaskSettings(**dict(task_settings or {})),
                                   loop_clips=bool(loop_clips), family=_family_config(family),
                                   reward_parts=[reward_parts] if isinstance(reward_parts, str) else list(reward_parts),
-                                  reward_relative_to_root=bool(reward_relative_to_root))
+                                  reward_relative_to_root=bool(reward_relative_to_root),
+                                  anchor_reference=bool(anchor_reference))
         session = Session(self, config)
         self._sessions.add(session)
         return session

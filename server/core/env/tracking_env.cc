@@ -93,7 +93,7 @@ bool TrackingEnv::PhysicsDiverged() const {
 TrackingErrors TrackingEnv::CurrentTrackingTerms(float* terms) {
   ReadSimulatedState(*kinematics_, data_, &sim_);
   ReadReferenceState(*motion_, frame_, &reference_);
-  if (LoopsClip()) loop_motion_.Apply(&reference_);
+  if (MovesReference()) loop_motion_.Apply(&reference_);
   return ComputeImitationTerms(context_->config.reward, sim_, reference_, terms, body_distance_.data());
 }
 
@@ -127,7 +127,8 @@ void TrackingEnv::Step(const float* action, EnvRow row) {
                        &motion.dof_pos[static_cast<size_t>(next_frame) * motion.num_hinges()], pd_targets_.data());
   const double power = pd_.Step(pd_targets_.data(), data_);
   ++episode_steps_;
-  if (LoopsClip()) loop_motion_ = LoopMotionOf(next_frame);
+  // An anchored reference keeps the motion WriteObservation found: it carried next_frame.
+  if (LoopsClip() && !AnchorsReference()) loop_motion_ = LoopMotionOf(next_frame);
   // A tracking episode ends on reaching the last frame, so a step never starts there.
   frame_ = next_frame;
   if (PhysicsDiverged()) {
@@ -293,7 +294,16 @@ void TrackingEnv::WriteObservation(EnvRow row) {
   } else {
     const int next_frame = NextFrame();
     ReadReferenceState(motion, next_frame, &target_);
-    if (LoopsClip()) LoopMotionOf(next_frame).Apply(&target_);
+    if (AnchorsReference()) {
+      // As a goal task's base motion: the frame before the next one put on the character, the
+      // next frame moved with it; Step scores against the same motion.
+      ReadReferenceState(motion, next_frame - 1, &reference_);
+      loop_motion_ = PlanarMotion::Between(reference_.body_pos[0], reference_.body_rot[0], sim_.body_pos[0],
+                                           sim_.body_rot[0]);
+      loop_motion_.Apply(&target_);
+    } else if (LoopsClip()) {
+      LoopMotionOf(next_frame).Apply(&target_);
+    }
     if (spec.task == TaskKind::kVrTracking) {
       WriteSelfObservation(spec, sim_, obs);
       for (size_t k = 0; k < context_->vr_body_ids.size(); ++k) {

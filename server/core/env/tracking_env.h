@@ -53,6 +53,9 @@ struct TrackingEnvConfig {
   bool random_start_frame = true;
   // Tracking: the clip loops (SessionConfig.loop_clips); episodes end at TaskEpisodeSteps.
   bool loop_clips = false;
+  // Tracking: the reference is carried onto the character's root and heading each step, as a goal
+  // task's base motion is (SessionConfig.anchor_reference).
+  bool anchor_reference = false;
   // A motor-skill family (family_episode.h): the session's parameter ranges; empty otherwise.
   std::vector<ParamRange> family;
   // false: an ended episode keeps its final state and later steps do nothing until the next
@@ -142,6 +145,11 @@ class TrackingEnv {
   // looping clips go on at frame 1.
   int NextFrame() const;
   bool LoopsClip() const { return context_->config.loop_clips && goal_task_ == nullptr; }
+  bool AnchorsReference() const {
+    return context_->config.anchor_reference && goal_task_ == nullptr && family_ == nullptr;
+  }
+  // Whether loop_motion_ carries the reference: a loop's cycles, or the anchor onto the character.
+  bool MovesReference() const { return LoopsClip() || AnchorsReference(); }
   // Where the reference of `frame`, the next frame or the current one, lies in this loop (the
   // next cycle's when `frame` wrapped).
   PlanarMotion LoopMotionOf(int frame) const;
@@ -169,7 +177,7 @@ class TrackingEnv {
   const HumanoidModel* kinematics_ = nullptr;
   int clip_ = 0;
   // A looping clip: where the current cycle's reference lies, and the clip's own displacement per
-  // cycle.
+  // cycle. An anchored reference: the motion that put this step's frame on the character.
   PlanarMotion loop_motion_, cycle_motion_;
   int frame_ = 0;
   int episode_steps_ = 0;
