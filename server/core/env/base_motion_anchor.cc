@@ -29,8 +29,11 @@ void PlanarMotion::Apply(HumanoidState* state) const {
   }
 }
 
-void AnchorToCharacter(const HumanoidState& anchor, const HumanoidState& sim, HumanoidState* target) {
-  PlanarMotion::Between(anchor.body_pos[0], anchor.body_rot[0], sim.body_pos[0], sim.body_rot[0]).Apply(target);
+PlanarMotion AnchorToCharacter(const HumanoidState& anchor, const HumanoidState& sim, HumanoidState* target) {
+  const PlanarMotion motion =
+      PlanarMotion::Between(anchor.body_pos[0], anchor.body_rot[0], sim.body_pos[0], sim.body_rot[0]);
+  motion.Apply(target);
+  return motion;
 }
 
 PlanarMotion ClipCycleMotion(const MotionClip& clip) {

@@ -27,8 +27,8 @@ struct PlanarMotion {
 };
 
 // Moves `target` by the planar motion that maps `anchor`'s root onto `sim`'s root (x, y and
-// heading; heights and tilts are left as the clip has them).
-void AnchorToCharacter(const HumanoidState& anchor, const HumanoidState& sim, HumanoidState* target);
+// heading; heights and tilts are left as the clip has them), and returns that motion.
+PlanarMotion AnchorToCharacter(const HumanoidState& anchor, const HumanoidState& sim, HumanoidState* target);
 
 // A looping clip's displacement per cycle: the planar motion from its first frame's root to its
 // last frame's (SessionConfig.loop_clips).

@@ -298,9 +298,7 @@ void TrackingEnv::WriteObservation(EnvRow row) {
       // As a goal task's base motion: the frame before the next one put on the character, the
       // next frame moved with it; Step scores against the same motion.
       ReadReferenceState(motion, next_frame - 1, &reference_);
-      loop_motion_ = PlanarMotion::Between(reference_.body_pos[0], reference_.body_rot[0], sim_.body_pos[0],
-                                           sim_.body_rot[0]);
-      loop_motion_.Apply(&target_);
+      loop_motion_ = AnchorToCharacter(reference_, sim_, &target_);
     } else if (LoopsClip()) {
       LoopMotionOf(next_frame).Apply(&target_);
     }
