@@ -128,6 +128,7 @@ absl::Status TrainerConfig::Validate() const {
   if (!(lambda >= 0 && lambda <= 1)) return bad("lambda", lambda, "must be in [0, 1]");
   if (amp_samples < 1) return bad("amp_samples", amp_samples, "must be >= 1");
   if (task_reward_weight < 0 || amp_reward_weight < 0) return absl::InvalidArgumentError("reward weights must be >= 0");
+  if (!(energy_weight >= 0 && energy_weight <= 100)) return bad("energy_weight", energy_weight, "must be in [0, 100]");
   if (run_dir.empty()) return absl::InvalidArgumentError("--run_dir: required");
   if (report_every < 0) return bad("report_every", report_every, "must be >= 0");
   if (checkpoint_every < 1) return bad("checkpoint_every", checkpoint_every, "must be >= 1");
@@ -208,6 +209,7 @@ std::string TrainerConfig::ToJson() const {
   json["clip_ratio"] = clip_ratio;
   json["task_reward_weight"] = task_reward_weight;
   json["amp_reward_weight"] = amp_reward_weight;
+  json["energy_weight"] = energy_weight;
   json["discriminator_learning_rate"] = discriminator_learning_rate;
   json["gradient_penalty_weight"] = gradient_penalty_weight;
   json["seed"] = seed;

@@ -67,6 +67,7 @@ std::vector<SharedSetting> SharedSettings(const TrainerConfig& c) {
       {"value_coefficient", Text(c.value_coefficient)},
       {"max_grad_norm", Text(c.max_grad_norm)},
       {"amp_reward_weight", absl::StrCat(Text(c.amp_reward_weight), " (task ", Text(c.task_reward_weight), ")")},
+      {"energy_weight", Text(c.energy_weight)},
       {"discriminator_learning_rate", Text(c.discriminator_learning_rate)},
       {"gradient_penalty_weight", Text(c.gradient_penalty_weight)},
       {"discriminator_epochs", Text(c.discriminator_epochs)},

@@ -370,6 +370,8 @@ TEST(LearnerTrainingTest, BadConfigurationsAreClearErrors) {
       {[](TrainerConfig* c) { c->learning_rate_floor = 0; }, "--learning_rate_floor"},
       {[](TrainerConfig* c) { c->learning_rate_floor = 1.5; }, "--learning_rate_floor"},
       {[&](TrainerConfig* c) { c->learning_rate_floor = nan; }, "--learning_rate_floor"},
+      {[](TrainerConfig* c) { c->energy_weight = -1; }, "--energy_weight"},
+      {[&](TrainerConfig* c) { c->energy_weight = nan; }, "--energy_weight"},
       {[](TrainerConfig* c) { c->curriculum_start = 0.25, c->curriculum_end = 1.0; }, "--termination_curriculum"},
       {[&](TrainerConfig* c) { c->curriculum_start = nan, c->curriculum_end = 0.25; }, "--termination_curriculum"},
       {[](TrainerConfig* c) {
@@ -482,6 +484,10 @@ TEST(LearnerTrainingTest, SteerPolicyTrainsOverATrackersFrozenSkills) {
   ASSERT_TRUE((*trainer)->Run().ok());
   EXPECT_EQ((*trainer)->iteration(), 2);
   EXPECT_TRUE(std::isfinite((*trainer)->history().back().policy_loss));
+  // The training reward is the server's: speed + facing + energy (the paper's penalty, negative).
+  const IterationStats& paid = (*trainer)->history().back();
+  EXPECT_LT(paid.reward_terms[2], 0.0) << "energy";
+  EXPECT_NEAR(paid.mean_task_reward, paid.reward_terms[0] + paid.reward_terms[1] + paid.reward_terms[2], 1e-5);
   auto client = ConnectTo(*server);
   EXPECT_EQ(client->GetStats()->failure_reports(), 0) << "steer episodes follow no clip";
 
@@ -491,10 +497,14 @@ TEST(LearnerTrainingTest, SteerPolicyTrainsOverATrackersFrozenSkills) {
 
   config.resume = true;
   config.iterations = 1;
+  config.energy_weight = 0;  // the resumed part trains without the penalty: no step is negative
   auto resumed = Trainer::Create(config);
   ASSERT_TRUE(resumed.ok()) << resumed.status();
   ASSERT_TRUE((*resumed)->Run().ok());
   EXPECT_EQ((*resumed)->iteration(), 3);
+  const IterationStats& unpaid = (*resumed)->history().back();
+  EXPECT_LT(unpaid.reward_terms[2], 0.0) << "the server still reports energy";
+  EXPECT_NEAR(unpaid.mean_task_reward, unpaid.reward_terms[0] + unpaid.reward_terms[1], 1e-5);
   ExpectSkillsIntact(skills, dir + "/policy.pt", *tracking, (*trainer)->spec());
   auto imported = ImportTaskPolicy(dir + "/policy.pt", (*trainer)->spec());
   ASSERT_TRUE(imported.ok()) << imported.status();

@@ -113,6 +113,9 @@ ABSL_FLAG(int64_t, learning_rate_decay_steps, 0,
 ABSL_FLAG(double, learning_rate_floor, 0.1, "the decayed learning rate's final fraction of --learning_rate, in (0, 1]");
 ABSL_FLAG(double, log_std, 0, "fixed log standard deviation of the Gaussian policy (0: the preset's)");
 ABSL_FLAG(double, amp_reward_weight, 0.5, "weight of the AMP style reward (task: 1 - this)");
+ABSL_FLAG(double, energy_weight, 1,
+          "scale of the server's energy penalty in the training reward (1: the paper's; 0: off, so that "
+          "no step of a goal task is negative and falling never pays)");
 ABSL_FLAG(std::string, action_mode, "", "absolute (PD target = offset + scale * a, the paper's) or residual "
           "(the reference pose + residual_scale * scale * a); default: the preset's (small: residual, paper: absolute)");
 ABSL_FLAG(double, residual_scale, 0.5, "residual mode: share of each hinge's action scale an action of 1 moves");
@@ -393,6 +396,7 @@ absl::StatusOr<TrainerConfig> ConfigFromFlags(const std::string& token) {
   if (!(amp_weight >= 0 && amp_weight <= 1)) return absl::InvalidArgumentError("--amp_reward_weight must be in [0, 1]");
   config->amp_reward_weight = amp_weight;
   config->task_reward_weight = 1 - amp_weight;
+  config->energy_weight = absl::GetFlag(FLAGS_energy_weight);
   if (!absl::GetFlag(FLAGS_action_mode).empty()) config->action_mode = absl::GetFlag(FLAGS_action_mode);
   config->residual_scale = absl::GetFlag(FLAGS_residual_scale);
   config->termination_distance = absl::GetFlag(FLAGS_termination_distance);
