@@ -289,19 +289,45 @@ TEST(StrikeTaskTest, TargetStandsInFrontAndOnlyTheRightArmMayTouchIt) {
     strike.WriteGoal(sim, data, goal);
     EXPECT_NEAR(Vec3(goal[0], goal[1], 0).norm(), offset.norm(), 1e-4);
     for (int k = 9; k < 15; ++k) EXPECT_EQ(goal[k], 0.f) << "at rest";
-    float terms[1];
+    float terms[2];
     strike.Reward(sim, data, terms);
-    EXPECT_NEAR(terms[0], 0.f, 1e-6);
+    EXPECT_NEAR(terms[0], 0.f, 1e-6) << "standing";
+    EXPECT_GE(terms[1], 0.f);
+    EXPECT_LE(terms[1], static_cast<float>(StrikeTask::kApproachWeight));
   }
-  // Lying on its side: the full reward.
+
+  // The approach term: walking straight at a target 2 m ahead pays exp(-4 (1 - v)^2) of its weight,
+  // walking away pays nothing, standing within reach pays all of it.
+  HumanoidState walking = StandingState();
+  walking.body_vel[0] = HeadingRotation(walking.body_rot[0]) * Vec3(0.6, 0, 0.1);
+  const Vec3 ahead = HeadingRotation(walking.body_rot[0]) * Vec3::UnitX();
+  auto place_at = [&](const Vec3& p) {
+    data->qpos[qpos] = p.x();
+    data->qpos[qpos + 1] = p.y();
+    data->qpos[qpos + 3] = 1;
+    data->qpos[qpos + 4] = data->qpos[qpos + 5] = data->qpos[qpos + 6] = 0;
+  };
+  float terms[2];
+  place_at(walking.body_pos[0] + 2 * ahead);
+  strike.Reward(walking, data, terms);
+  EXPECT_NEAR(terms[1], StrikeTask::kApproachWeight * std::exp(-4 * 0.4 * 0.4), 1e-6);
+  place_at(walking.body_pos[0] - 2 * ahead);
+  strike.Reward(walking, data, terms);
+  EXPECT_EQ(terms[1], 0.f) << "walking away";
+  place_at(walking.body_pos[0] + 0.8 * ahead);
+  strike.Reward(walking, data, terms);
+  EXPECT_FLOAT_EQ(terms[1], StrikeTask::kApproachWeight) << "within reach";
+
+  // Lying on its side, far away: the full reward.
+  place_at(walking.body_pos[0] - 2 * ahead);
   const Quat lying(Eigen::AngleAxisd(M_PI / 2, Vec3::UnitX()));
   data->qpos[qpos + 3] = lying.w();
   data->qpos[qpos + 4] = lying.x();
   data->qpos[qpos + 5] = lying.y();
   data->qpos[qpos + 6] = lying.z();
-  float terms[1];
-  strike.Reward(StandingState(), data, terms);
-  EXPECT_NEAR(terms[0], 1.f, 1e-6);
+  strike.Reward(walking, data, terms);
+  EXPECT_NEAR(terms[0], StrikeTask::kTipWeight, 1e-6);
+  EXPECT_FLOAT_EQ(terms[1], StrikeTask::kApproachWeight) << "once it is down";
   // Standing where the pelvis is: the torso touches it.
   const Quat upright = Quat::Identity();
   data->qpos[qpos + 3] = upright.w();
@@ -399,9 +425,11 @@ TEST(TaskEnvTest, StrikeEpisodesStepAndRestartTheTarget) {
   for (int step = 0; step < 90; ++step) {
     ASSERT_TRUE(batch->Step(zeros).ok());
     for (int i = 0; i < 3; ++i) {
-      const float strike = batch->buffers().reward_terms[i * 2];
-      EXPECT_GE(strike, 0.f);
-      EXPECT_LE(strike, 1.f);
+      const float* terms = &batch->buffers().reward_terms[i * 3];
+      EXPECT_GE(terms[0], 0.f);
+      EXPECT_LE(terms[0], static_cast<float>(StrikeTask::kTipWeight));
+      EXPECT_GE(terms[1], 0.f);
+      EXPECT_LE(terms[1], static_cast<float>(StrikeTask::kApproachWeight));
       episodes += batch->buffers().done[i];
       // The goal's target stands within reach of a new episode's start or is being played with.
       const float* goal = &batch->buffers().obs[i * batch->spec().obs_size + batch->spec().goal_obs.start];

@@ -132,7 +132,7 @@ class ClientTest(unittest.TestCase):
             self.assertTrue(np.all((speeds >= 1.0) & (speeds <= 1.5)), speeds)
             result = session.step(np.zeros((2, spec.action_size), np.float32))
             self.assertEqual(result.reward_terms.shape, (2, 3))
-        self.assertEqual(self.client.describe().tasks["strike"], (15, ("strike", "energy")))
+        self.assertEqual(self.client.describe().tasks["strike"], (15, ("strike", "approach", "energy")))
         with self.assertRaises(modskill.ServerError) as caught:
             self.client.session(2, task="sterr")
         self.assertEqual(caught.exception.code, grpc.StatusCode.INVALID_ARGUMENT)

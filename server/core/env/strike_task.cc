@@ -47,7 +47,18 @@ void StrikeTask::Reward(const HumanoidState& sim, const mjData* data, float* ter
   const double* q = data->qpos + context_->target_qpos;
   const Quat rotation(q[3], q[4], q[5], q[6]);
   const double up = (rotation.normalized() * Vec3::UnitZ()).z();
-  terms[0] = static_cast<float>(std::clamp(1.0 - up, 0.0, 1.0));
+  const double tip = std::clamp(1.0 - up, 0.0, 1.0);
+  terms[0] = static_cast<float>(kTipWeight * tip);
+  Vec3 to_target = Read3(q) - sim.body_pos[0];
+  to_target.z() = 0;
+  const double distance = to_target.norm();
+  double approach = 1;
+  if (distance > kNearDistance && tip < 0.5) {
+    const double toward = sim.body_vel[0].dot(to_target / distance);
+    const double shortfall = std::max(0.0, kApproachSpeed - toward);
+    approach = toward > 0 ? std::exp(-4 * shortfall * shortfall) : 0;
+  }
+  terms[1] = static_cast<float>(kApproachWeight * approach);
 }
 
 bool StrikeTask::Failed(const mjData* data) const {

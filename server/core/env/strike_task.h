@@ -20,8 +20,16 @@ class StrikeTask : public GoalTask {
 
   // Stands the target up at a random place in front, at rest.
   void Reset(const HumanoidState& sim, mjData* data, std::mt19937_64& rng) override;
-  // strike = 1 - up . u_target, u_target the target's long axis: 0 standing, 1 lying.
+  // ASE's strike reward, which PULSE's and ModSkill's strike inherit:
+  //   strike   = kTipWeight (1 - up . u_target), u_target the target's long axis (0 standing, 1 lying);
+  //   approach = kApproachWeight exp(-4 max(0, 1 m/s - v_toward)^2) while the root moves toward the
+  //              target (0 moving away), kApproachWeight once within kNearDistance or once it is down.
+  // Tipping alone is a reward a head over walking skills never finds (it scored 0 in every run);
+  // the approach term leads it to the target.
   void Reward(const HumanoidState& sim, const mjData* data, float* terms) override;
+  static constexpr double kTipWeight = 0.6, kApproachWeight = 0.4;
+  static constexpr double kApproachSpeed = 1.0;  // m/s
+  static constexpr double kNearDistance = 1.0;   // m, root to target, horizontal: within striking reach
   // A body other than R_Hand, R_Wrist, R_Elbow touches the target, or the target is lost.
   bool Failed(const mjData* data) const override;
   // The target's position relative to the root (3), rotation (6, tangent-normal), linear and

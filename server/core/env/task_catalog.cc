@@ -19,10 +19,10 @@ const std::vector<TaskInfo>& AllTasks() {
       {TaskKind::kReach, "reach", 3, {"reach", "energy"},
        "goal = target point minus the root (heading frame, m), sampled in a 2 m box around (0, 0, 1); "
        "r = exp(-5 |p_R_Hand - c|^2)"},
-      {TaskKind::kStrike, "strike", 15, {"strike", "energy"},
+      {TaskKind::kStrike, "strike", 15, {"strike", "approach", "energy"},
        "goal = the target pillar's position (relative to the root), rotation, linear and angular velocity "
-       "(heading frame); r = 1 - up.u_target; fails when a body other than R_Hand, R_Wrist, R_Elbow "
-       "touches it"},
+       "(heading frame); r = 0.6 (1 - up.u_target) + 0.4 exp(-4 max(0, 1 - v_toward)^2) (1 within 1 m or "
+       "once it is down; ASE's); fails when a body other than R_Hand, R_Wrist, R_Elbow touches it"},
       {TaskKind::kVrTracking, "vr_tracking", 24 * kNumVrBodies, {"pos", "rot", "vel", "ang_vel", "energy"},
        "goal = the reference head and hands only (position, rotation, velocity and angular velocity "
        "differences, reference pose; heading frame); imitation reward; success and errors over the "
