@@ -5,7 +5,7 @@
 # (modskill-learner --eval --task T --task_baselines), and writes a table and the curves.
 #
 #   bench/task_bench.sh --out DIR --skills TRACKER/policy.pt --minutes M [--motions a,b]
-#       [--resume] [--eval_episodes N] NAME="learner flags" [NAME=...]
+#       [--resume] [--eval_episodes N] [--server_flags "--motions DIR"] NAME="learner flags" [NAME=...]
 #
 # Every variant's flags must name its task, e.g.
 #   bench/task_bench.sh --out runs/tasks --skills runs/skills/proprio/policy.pt --minutes 30 \
@@ -14,7 +14,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD="${MODSKILL_BUILD_DIR:-build}"
-OUT="" SKILLS="" MINUTES=30 MOTIONS="" RESUME="" EPISODES=64
+OUT="" SKILLS="" MINUTES=30 MOTIONS="" RESUME="" EPISODES=64 SERVER_FLAGS=""
 VARIANTS=()
 while (($#)); do
   case "$1" in
@@ -23,6 +23,7 @@ while (($#)); do
     --minutes) MINUTES="$2"; shift 2 ;;
     --motions) MOTIONS="$2"; shift 2 ;;
     --eval_episodes) EPISODES="$2"; shift 2 ;;
+    --server_flags) SERVER_FLAGS="$2"; shift 2 ;;
     --resume) RESUME="--resume"; shift ;;
     -h|--help) sed -n 2,13p "$0"; exit 0 ;;
     *=*) VARIANTS+=("$1"); shift ;;
@@ -34,7 +35,7 @@ done
 ((${#VARIANTS[@]})) || { echo "error: give at least one NAME=\"--task T ...\" variant" >&2; exit 2; }
 mkdir -p "$OUT"
 source bench/side_by_side.sh
-train_side_by_side "--no_generative" --skills "$SKILLS" --iterations 1000000 --time_budget_min "$MINUTES" \
+train_side_by_side "--no_generative $SERVER_FLAGS" --skills "$SKILLS" --iterations 1000000 --time_budget_min "$MINUTES" \
     ${MOTIONS:+--motions "$MOTIONS"} $RESUME || exit 1
 
 # Evaluation: the task policy, random z and constant z over the same frozen skills, one variant
