@@ -123,6 +123,7 @@ ServerPoolOptions Trainer::PoolOptions() const {
   pool.session.set_anchor_reference(config.anchor_reference);
   for (const std::string& part : config.reward_parts) pool.session.add_reward_parts(part);
   pool.session.set_reward_relative_to_root(config.reward_relative_to_root);
+  if (config.energy_weight != 1.0) pool.session.set_energy_weight(static_cast<float>(config.energy_weight));
   if (!IsTrackingTask(config.task)) {
     pool.session.set_task(config.task);
     v1::TaskSettings* settings = pool.session.mutable_task_settings();

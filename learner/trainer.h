@@ -40,7 +40,7 @@ struct IterationStats {
   double collect_seconds = 0;
   double update_seconds = 0;
   double env_steps_per_second = 0;  // this iteration, collection and update included
-  double mean_task_reward = 0;    // per step: the server's terms, energy x config.energy_weight
+  double mean_task_reward = 0;    // per step: the server's reward (its terms' sum)
   double mean_amp_reward = 0;
   double mean_episode_return = 0;  // task reward, episodes completed recently
   double mean_episode_length = 0;

@@ -124,11 +124,7 @@ absl::Status Trainer::RecordStep(SlotRollout& r, int t) {
   for (const auto* tensor : {&reward, &done, &truncated, &amp, &terms}) {
     if (!tensor->ok()) return tensor->status();
   }
-  // The server's reward is the sum of its terms, energy last; the training reward scales energy.
-  const torch::Tensor training_reward =
-      config_.energy_weight == 1.0 ? *reward
-                                   : *reward + (config_.energy_weight - 1.0) * terms->select(1, spec_.reward_terms_size() - 1);
-  r.task_reward[t].copy_(training_reward);
+  r.task_reward[t].copy_(*reward);
   r.dones[t].copy_(*done);
   r.truncated[t].copy_(*truncated);
   r.amp_next[t].copy_(*amp);
@@ -138,7 +134,7 @@ absl::Status Trainer::RecordStep(SlotRollout& r, int t) {
   auto& goal_returns = episode_goal_return_[slot_index_[r.slot]];
   const torch::Tensor goal_reward = task_return_ ? task_return_->GoalReward(*terms).contiguous() : torch::Tensor();
   const double* goal_data = task_return_ ? goal_reward.data_ptr<double>() : nullptr;
-  const torch::Tensor reward_contiguous = training_reward.contiguous();
+  const torch::Tensor reward_contiguous = reward->contiguous();
   const float* reward_data = reward_contiguous.data_ptr<float>();
   const float* done_data = done->data_ptr<float>();
   const float* truncated_data = truncated->data_ptr<float>();

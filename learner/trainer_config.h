@@ -111,11 +111,11 @@ struct TrainerConfig {
   double max_grad_norm = 1.0;
   double task_reward_weight = 0.5;  // PHC: task and AMP rewards 0.5 / 0.5
   double amp_reward_weight = 0.5;
-  // Scales the server's energy column (the last reward term) in the training reward; 1: the
-  // paper's penalty as the server sends it. A goal task over frozen skills pays about 0.03 per step
-  // for reaching while the penalty costs about 0.12, so every step lived is negative and PPO learns
-  // to fall (reach, 2026-12-04); 0 keeps each step's reward >= 0. Evaluation's normalized return
-  // never counts energy.
+  // The sessions' SessionConfig.energy_weight: the server's energy penalty as a multiple of the
+  // paper's (1: left unset on the wire, so family sessions, which have none, accept it). A goal
+  // task over frozen skills pays about 0.03 per step for reaching while the penalty costs about
+  // 0.12, so every step lived is negative and PPO learns to fall (reach, 2026-12-04); 0 keeps each
+  // step's reward >= 0. Evaluation's normalized return never counts energy.
   double energy_weight = 1.0;
   double discriminator_learning_rate = 1e-4;
   double gradient_penalty_weight = 5.0;

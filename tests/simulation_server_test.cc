@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <optional>
 #include <thread>
 
 #include <gmock/gmock.h>
@@ -145,6 +146,11 @@ TEST_F(SimulationServerTest, BadSessionConfigsAreRejected) {
   config = Config(2);
   config.set_termination_bodies(static_cast<v1::TerminationBodies>(5));
   cases.push_back({config, absl::StatusCode::kInvalidArgument, "termination_bodies"});
+  for (float weight : {-0.5f, std::nanf(""), std::numeric_limits<float>::infinity(), 100.5f}) {
+    config = Config(2);
+    config.set_energy_weight(weight);
+    cases.push_back({config, absl::StatusCode::kInvalidArgument, "energy_weight"});
+  }
   for (const Case& c : cases) {
     auto stream = client_->OpenSession(c.config);
     ASSERT_FALSE(stream.ok()) << c.message;
@@ -255,6 +261,42 @@ TEST_F(SimulationServerTest, TooManySessionsIsResourceExhausted) {
   open.pop_back();
   auto again = client_->OpenSession(Config(1));
   EXPECT_TRUE(again.ok()) << again.status();
+}
+
+// SessionConfig.energy_weight scales the energy column (and so the reward) and nothing else.
+TEST_F(SimulationServerTest, EnergyWeightScalesTheEnergyTerm) {
+  auto run = [&](std::optional<float> weight, std::vector<float>* terms, std::vector<float>* rewards) {
+    v1::SessionConfig config = Config(4, 9);
+    config.set_termination(v1::NONE);  // no resets: every row is past the energy-free steps
+    if (weight) config.set_energy_weight(*weight);
+    auto stream = client_->OpenSession(config);
+    ASSERT_TRUE(stream.ok()) << stream.status();
+    std::vector<float> zeros(4 * 69, 0.f), step_terms, reward;
+    for (int s = 0; s < 6; ++s) {
+      ASSERT_TRUE((*stream)->Step(zeros.data()).ok());
+      ASSERT_TRUE(ReadFloatTensor((*stream)->result().reward_terms(), "reward_terms", &step_terms).ok());
+      ASSERT_TRUE(ReadFloatTensor((*stream)->result().reward(), "reward", &reward).ok());
+      terms->insert(terms->end(), step_terms.begin(), step_terms.end());
+      rewards->insert(rewards->end(), reward.begin(), reward.end());
+    }
+    ASSERT_TRUE((*stream)->Close().ok());
+  };
+  std::vector<float> paper, paper_reward, doubled, doubled_reward, off, off_reward;
+  run(std::nullopt, &paper, &paper_reward);
+  run(2.f, &doubled, &doubled_reward);
+  run(0.f, &off, &off_reward);
+  const size_t columns = paper.size() / paper_reward.size();
+  ASSERT_EQ(columns, 5u);  // pos, rot, vel, ang_vel, energy
+  double paper_energy = 0;
+  for (size_t row = 0; row < paper_reward.size(); ++row) {
+    const size_t energy = row * columns + columns - 1;
+    paper_energy += paper[energy];
+    EXPECT_NEAR(doubled[energy], 2 * paper[energy], 1e-6 + 1e-5 * std::abs(paper[energy])) << row;
+    EXPECT_EQ(off[energy], 0.f) << row;
+    for (size_t c = 0; c + 1 < columns; ++c) EXPECT_EQ(off[row * columns + c], paper[row * columns + c]) << row;
+    EXPECT_NEAR(off_reward[row], paper_reward[row] - paper[energy], 1e-5) << row;
+  }
+  EXPECT_LT(paper_energy, 0.0) << "zero actions spend power";
 }
 
 TEST_F(SimulationServerTest, TwoConcurrentSessions) {

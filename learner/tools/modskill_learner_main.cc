@@ -114,7 +114,7 @@ ABSL_FLAG(double, learning_rate_floor, 0.1, "the decayed learning rate's final f
 ABSL_FLAG(double, log_std, 0, "fixed log standard deviation of the Gaussian policy (0: the preset's)");
 ABSL_FLAG(double, amp_reward_weight, 0.5, "weight of the AMP style reward (task: 1 - this)");
 ABSL_FLAG(double, energy_weight, 1,
-          "scale of the server's energy penalty in the training reward (1: the paper's; 0: off, so that "
+          "the sessions' energy penalty as a multiple of the paper's (SessionConfig.energy_weight; 1: the paper's; 0: off, so that "
           "no step of a goal task is negative and falling never pays)");
 ABSL_FLAG(std::string, action_mode, "", "absolute (PD target = offset + scale * a, the paper's) or residual "
           "(the reference pose + residual_scale * scale * a); default: the preset's (small: residual, paper: absolute)");

@@ -1,6 +1,7 @@
 #include "server/service/session_config_validation.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
@@ -60,6 +61,20 @@ absl::StatusOr<TaskSettings> ToTaskSettings(const v1::TaskSettings& wire) {
   if (wire.max_goal_interval_s() != 0) settings.max_goal_interval_s = wire.max_goal_interval_s();
   if (absl::Status status = settings.Validate(); !status.ok()) return status;
   return settings;
+}
+
+absl::StatusOr<double> ToEnergyCoefficient(const v1::SessionConfig& config, bool family) {
+  const double paper = ImitationRewardConfig().energy_coefficient;
+  if (!config.has_energy_weight()) return paper;
+  const float weight = config.energy_weight();
+  if (!(std::isfinite(weight) && weight >= 0 && weight <= 100)) {
+    return absl::InvalidArgumentError(absl::StrCat("energy_weight: ", weight, " must be finite, in [0, 100]"));
+  }
+  if (family && weight != 0) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("energy_weight: ", weight, " set, but a family session has no energy penalty (0 or unset)"));
+  }
+  return paper * weight;
 }
 
 absl::StatusOr<std::vector<ParamRange>> ToFamilyRanges(const v1::SessionConfig& config, ActionMode action_mode,
@@ -135,6 +150,8 @@ absl::StatusOr<SessionSettings> ParseSessionConfig(const v1::SessionConfig& conf
   if (!family_ranges.ok()) return family_ranges.status();
   auto reward_bodies = ToRewardBodies(config.reward_parts(), *layout, *task);
   if (!reward_bodies.ok()) return reward_bodies.status();
+  auto energy_coefficient = ToEnergyCoefficient(config, family);
+  if (!energy_coefficient.ok()) return energy_coefficient.status();
   if (config.reward_relative_to_root() && IsGoalTask(*task)) {
     return absl::InvalidArgumentError(absl::StrCat("reward_relative_to_root: task ", TaskInfoOf(*task).name,
                                                    " has no imitation reward"));
@@ -161,6 +178,7 @@ absl::StatusOr<SessionSettings> ParseSessionConfig(const v1::SessionConfig& conf
   settings.env.family = *std::move(family_ranges);
   settings.env.reward.bodies = *std::move(reward_bodies);
   settings.env.reward.relative_to_root = config.reward_relative_to_root();
+  settings.env.reward.energy_coefficient = *energy_coefficient;
   // A family leaves its clip by design (a higher jump, another gravity): a loose default.
   if (family && config.termination_distance() == 0 && *termination == TerminationMode::kTraining) {
     settings.env.termination_distance = kFamilyDefaultTerminationDistance;

@@ -48,6 +48,9 @@ absl::StatusOr<TaskSettings> ToTaskSettings(const v1::TaskSettings& wire);
 // field otherwise.
 absl::StatusOr<std::vector<ParamRange>> ToFamilyRanges(const v1::SessionConfig& config, ActionMode action_mode,
                                                        TaskKind task);
+// The energy penalty's coefficient: the paper's x SessionConfig.energy_weight (unset: 1);
+// INVALID_ARGUMENT naming energy_weight outside [0, 100] or non-zero in a family session.
+absl::StatusOr<double> ToEnergyCoefficient(const v1::SessionConfig& config, bool family);
 // The bodies of the named parts of `layout`, sorted (empty for none: every body); INVALID_ARGUMENT
 // naming reward_parts[i] for an unknown or repeated part, or reward_parts for a goal task.
 absl::StatusOr<std::vector<int>> ToRewardBodies(const google::protobuf::RepeatedPtrField<std::string>& reward_parts,

@@ -285,6 +285,19 @@ class ClientTest(unittest.TestCase):
             self.client.session(1, amp_obs="sometimes")
         with self.assertRaisesRegex(ValueError, "termination"):
             self.client.session(1, termination="never")
+        # energy_weight=0: the energy column is 0 and the rest of the reward unchanged.
+        zeros = np.zeros((2, 69), np.float32)
+        kwargs = dict(seed=3, termination="none")  # no resets: every row is past the energy-free steps
+        with self.client.session(2, energy_weight=0.0, **kwargs) as off, self.client.session(2, **kwargs) as paper:
+            for _ in range(5):
+                unpaid, paid = off.step(zeros), paper.step(zeros)
+            self.assertTrue((unpaid.reward_terms[:, -1] == 0).all())
+            self.assertTrue((paid.reward_terms[:, -1] < 0).all())
+            np.testing.assert_allclose(unpaid.reward, paid.reward - paid.reward_terms[:, -1], atol=1e-5)
+        with self.assertRaises(modskill.ServerError) as caught:
+            with self.client.session(1, energy_weight=-1.0) as session:
+                session.step(np.zeros((1, 69), np.float32))
+        self.assertIn("energy_weight", caught.exception.message)
 
     def test_action_modes_and_termination_distance(self):
         self.assertEqual(list(self.client.describe().action_modes), ["absolute", "residual"])

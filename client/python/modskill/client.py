@@ -380,7 +380,7 @@ class Client:
                 task_settings: Optional[Mapping[str, float]] = None, loop_clips: bool = False,
                 family: Optional[Mapping[str, Union[float, Tuple[float, float]]]] = None,
                 reward_parts: Sequence[str] = (), reward_relative_to_root: bool = False,
-                anchor_reference: bool = False) -> "Session":
+                anchor_reference: bool = False, energy_weight: Optional[float] = None) -> "Session":
         """Opens a simulation session of ``num_envs`` envs and returns it once the server has
         reset them (``Session.initial`` holds the first observations).
 
@@ -418,6 +418,8 @@ class Client:
           anchor_reference: tracking only: each step the reference's next frame is carried onto
             the character's root and heading (as a goal task's base motion is), so the reward and
             termination ask the character to go on from where it is, not to win back drift.
+          energy_weight: the energy penalty as a multiple of the paper's, in [0, 100]; None: 1.
+            0 turns it off (its ``reward_terms`` column stays, at 0).
 
         Use it as a context manager (or call ``close()``) so that the server frees the envs.
         """
@@ -439,6 +441,8 @@ class Client:
                                   reward_parts=[reward_parts] if isinstance(reward_parts, str) else list(reward_parts),
                                   reward_relative_to_root=bool(reward_relative_to_root),
                                   anchor_reference=bool(anchor_reference))
+        if energy_weight is not None:
+            config.energy_weight = float(energy_weight)
         session = Session(self, config)
         self._sessions.add(session)
         return session
