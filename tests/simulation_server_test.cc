@@ -295,6 +295,7 @@ TEST_F(SimulationServerTest, EnergyWeightScalesTheEnergyTerm) {
     EXPECT_EQ(off[energy], 0.f) << row;
     for (size_t c = 0; c + 1 < columns; ++c) EXPECT_EQ(off[row * columns + c], paper[row * columns + c]) << row;
     EXPECT_NEAR(off_reward[row], paper_reward[row] - paper[energy], 1e-5) << row;
+    EXPECT_NEAR(doubled_reward[row], paper_reward[row] + paper[energy], 1e-5) << row;
   }
   EXPECT_LT(paper_energy, 0.0) << "zero actions spend power";
 }
