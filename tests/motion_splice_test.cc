@@ -44,7 +44,9 @@ TEST(MotionSpliceTest, KeepsTheBasesBodyAndTravelAndTakesThePartsFromTheSource) 
   for (int f = 0; f < walk.num_frames; ++f) {
     EXPECT_NEAR(spliced->root_pos[f].x(), walk.root_pos[f].x(), 1e-12);
     EXPECT_NEAR(spliced->root_pos[f].y(), walk.root_pos[f].y(), 1e-12);
-    EXPECT_NEAR(spliced->root_pos[f].z() - walk.root_pos[f].z(), lift, 1e-6) << "frame " << f;
+    // The floor is found again frame by frame (floor_height.h) on a clip already on it: it moves
+    // a few millimetres, not more.
+    EXPECT_NEAR(spliced->root_pos[f].z() - walk.root_pos[f].z(), lift, 0.005) << "frame " << f;
     for (int b = 0; b < walk.num_bodies; ++b) {
       if (IsIn(arms, b)) continue;
       EXPECT_EQ(spliced->local(f, b).coeffs(), walk.local(f, b).coeffs()) << "frame " << f << " body " << b;

@@ -97,6 +97,16 @@ void PrintSummary(const HumanoidSpec& spec, const MotionClip& clip, const std::s
   std::printf("  height          %.3f m (head top above the floor, frame 0)\n", top - LowestGeomPoint(spec, clip, 0));
   std::printf("  root height     mean %.3f  min %.3f  max %.3f m\n", mean_height, min_height, max_height);
   std::printf("  foot contact    %.1f %% of frames\n", 100.0 * FootContactRatio(spec, clip));
+  // How far each frame's lowest geometry point is above the floor: a walk or a crawl should
+  // stay near 0 (a retargeted clip that floats cannot be tracked); a flight rises.
+  double clearance_sum = 0, clearance_max = 0;
+  for (int f = 0; f < clip.num_frames; ++f) {
+    const double clearance = LowestGeomPoint(spec, clip, f);
+    clearance_sum += clearance;
+    clearance_max = std::max(clearance_max, clearance);
+  }
+  std::printf("  floor clearance mean %.3f  max %.3f m (lowest point per frame)\n",
+              clearance_sum / std::max(1, clip.num_frames), clearance_max);
 }
 
 int Import(const std::vector<std::string>& inputs, const HumanoidSpec& spec) {

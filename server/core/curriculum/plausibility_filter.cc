@@ -112,7 +112,9 @@ std::vector<FootSkate> FootSkates(const HumanoidSpec& spec, const MotionClip& cl
         fastest_frame = f;
       }
     }
-    if (speeds.empty()) continue;
+    // A plant lasts more than one frame; a foot near the floor for a single frame is a swing
+    // passing by (the walk's R_Leg variants brush it at 3.5 m/s), not a slide.
+    if (speeds.size() < kMinPlantFrames) continue;
     const size_t mid = speeds.size() / 2;
     std::nth_element(speeds.begin(), speeds.begin() + mid, speeds.end());
     feet.push_back({b, speeds[mid], static_cast<int>(speeds.size()), fastest, fastest_frame});

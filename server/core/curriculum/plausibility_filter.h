@@ -46,7 +46,8 @@ struct PlausibilityVerdict {
 
 // A foot is in contact while its geometry is this close to the floor (m), as in FootContactRatio.
 inline constexpr double kFootContactHeight = 0.03;
-
+// foot_skate judges a foot over at least this many contact frames: a plant lasts longer than one.
+inline constexpr size_t kMinPlantFrames = 2;
 
 // Lowest z of one body's geometry in one frame (needs body_pos/body_rot); the per-body form of
 // LowestGeomPoint.

@@ -1,5 +1,6 @@
 #include "server/core/motion/motion_clip.h"
 
+#include "server/core/motion/floor_height.h"
 #include "server/core/sim/body_kinematics.h"
 
 #include <algorithm>
@@ -158,16 +159,10 @@ absl::Status PlaceOnGround(const HumanoidSpec& spec, MotionClip* clip) {
   if (auto status = ComputeClipKinematics(spec, clip); !status.ok()) return status;
   std::vector<double> lowest(clip->num_frames);
   for (int f = 0; f < clip->num_frames; ++f) lowest[f] = LowestGeomPoint(spec, *clip, f);
-  // A low percentile, not the minimum, sets the floor: mocap often starts with a calibration
-  // pose or has a few glitched frames that would leave the rest of the clip floating.
-  std::vector<double> sorted = lowest;
-  const size_t k = sorted.size() / 20;
-  std::nth_element(sorted.begin(), sorted.begin() + k, sorted.end());
-  const double floor = sorted[k];
-  for (int f = 0; f < clip->num_frames; ++f) {
-    // Frames that would still be under the floor are lifted just enough: no start in the ground.
-    clip->root_pos[f].z() -= floor + std::min(0.0, lowest[f] - floor);
-  }
+  // The floor follows the clip, never above a frame's lowest point (floor_height.h): one
+  // constant shift leaves stretches of a retargeted clip floating.
+  const std::vector<double> floor = FloorHeights(lowest, clip->fps);
+  for (int f = 0; f < clip->num_frames; ++f) clip->root_pos[f].z() -= floor[f];
   return ComputeClipKinematics(spec, clip);
 }
 

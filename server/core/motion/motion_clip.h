@@ -65,8 +65,9 @@ absl::StatusOr<MotionClip> ResampleClip(const MotionClip& clip, double fps,
 // Lowest point of the collision geometry in one frame (needs body_pos/body_rot).
 double LowestGeomPoint(const HumanoidSpec& spec, const MotionClip& clip, int frame);
 
-// Shifts the clip vertically so that its lowest geometry point over the clip touches z = 0,
-// then recomputes kinematics.
+// Shifts each frame vertically by the floor under it (floor_height.h: a slowly varying height
+// that the clip's contacts touch, never above a frame's lowest geometry point), so that the
+// contacts rest on z = 0 and no frame is in the ground; then recomputes kinematics.
 absl::Status PlaceOnGround(const HumanoidSpec& spec, MotionClip* clip);
 
 // Fraction of frames with a foot (ankle or toe geometry) within `threshold` of the ground.
