@@ -4,7 +4,8 @@
 #
 #   train_side_by_side "SERVER FLAGS" LEARNER_FLAG...
 #
-# Reads BUILD, OUT and VARIANTS; fills NAMES, FLAGS (each variant's own flags) and PORTS (its
+# Reads BUILD, OUT, VARIANTS and, when the caller declares it, SERVER_FLAGS_FOR[NAME] (flags for
+# that variant's server only); fills NAMES, FLAGS (each variant's own flags) and PORTS (its
 # server's, kept running for evaluation until the script exits). Returns non-zero, naming the
 # log, when a variant fails.
 
@@ -24,8 +25,11 @@ train_side_by_side() {
   for variant in "${VARIANTS[@]}"; do
     name="${variant%%=*}" flags="${variant#*=}"
     port=$(free_port)
+    local own_server_flags=""
+    if declare -p SERVER_FLAGS_FOR > /dev/null 2>&1; then own_server_flags="${SERVER_FLAGS_FOR[$name]:-}"; fi
     # shellcheck disable=SC2086  # the flags are words on purpose
-    "$BUILD/server/modskill-server" --port "$port" --threads 1 $server_flags > "$OUT/$name.server.log" 2>&1 &
+    "$BUILD/server/modskill-server" --port "$port" --threads 1 $server_flags $own_server_flags \
+        > "$OUT/$name.server.log" 2>&1 &
     SERVERS+=($!)
     NAMES+=("$name") FLAGS+=("$flags") PORTS+=("$port")
     # shellcheck disable=SC2086
