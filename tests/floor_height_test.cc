@@ -64,6 +64,18 @@ TEST(FloorHeightTest, NoFrameEndsInTheGroundAndTheLowestTouches) {
   EXPECT_GT(floor[190], 0.0);
 }
 
+TEST(FloorHeightTest, AHighFrameRateFollowsTheSameDrift) {
+  // 10 s at 10,000 fps (an import's largest rate): windows of 10,001 frames are read at a stride.
+  const double fps = 10000;
+  std::vector<double> lowest;
+  for (int f = 0; f < 100000; ++f) lowest.push_back(0.02 * f / fps + 0.001 * std::sin(f / 300.0));
+  const std::vector<double> floor = FloorHeights(lowest, fps);
+  for (int f = 0; f < 100000; f += 997) {
+    EXPECT_GE(lowest[f] - floor[f], -1e-12) << "frame " << f;
+    EXPECT_LT(lowest[f] - floor[f], 0.008) << "frame " << f;
+  }
+}
+
 TEST(FloorHeightTest, TheShippedCmuWalkKeepsAFootOnTheFloor) {
   auto clip = ImportMotionFile(kCmuBvh, Spec());
   ASSERT_TRUE(clip.ok()) << clip.status();

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
 #include <limits>
 
 namespace modskill {
@@ -11,37 +12,51 @@ int HalfWidthInFrames(double seconds, double fps) {
   return std::max(0, static_cast<int>(std::lround(seconds * fps)));
 }
 
-// Applies `reduce(first, last)` over each frame's window [f - half, f + half], clipped to the clip.
-template <typename Reduce>
-std::vector<double> OverWindows(const std::vector<double>& values, int half, Reduce reduce) {
+// Each helper costs O(frames) or O(frames x kMaxQuantileSamples), whatever the frame rate: an
+// import at --fps 10000 has windows of thousands of frames.
+constexpr int kMaxQuantileSamples = 64;
+
+std::vector<double> MovingAverage(const std::vector<double>& values, int half) {
   const int frames = static_cast<int>(values.size());
-  std::vector<double> out(frames);
+  std::vector<double> prefix(frames + 1, 0.0), out(frames);
+  for (int f = 0; f < frames; ++f) prefix[f + 1] = prefix[f] + values[f];
   for (int f = 0; f < frames; ++f) {
-    out[f] = reduce(values.begin() + std::max(0, f - half), values.begin() + std::min(frames - 1, f + half) + 1);
+    const int first = std::max(0, f - half), last = std::min(frames - 1, f + half);
+    out[f] = (prefix[last + 1] - prefix[first]) / (last - first + 1);
   }
   return out;
 }
 
-std::vector<double> MovingAverage(const std::vector<double>& values, int half) {
-  return OverWindows(values, half, [](auto first, auto last) {
-    double sum = 0;
-    for (auto it = first; it != last; ++it) sum += *it;
-    return sum / static_cast<double>(last - first);
-  });
-}
-
+// The maximum over each frame's window, with a deque of candidates (indices of decreasing values).
 std::vector<double> RollingMax(const std::vector<double>& values, int half) {
-  return OverWindows(values, half, [](auto first, auto last) { return *std::max_element(first, last); });
+  const int frames = static_cast<int>(values.size());
+  std::vector<double> out(frames);
+  std::deque<int> candidates;
+  int next = 0;
+  for (int f = 0; f < frames; ++f) {
+    for (; next < frames && next <= f + half; ++next) {
+      while (!candidates.empty() && values[candidates.back()] <= values[next]) candidates.pop_back();
+      candidates.push_back(next);
+    }
+    while (candidates.front() < f - half) candidates.pop_front();
+    out[f] = values[candidates.front()];
+  }
+  return out;
 }
 
+// A long window is read at a stride: at most kMaxQuantileSamples values per frame.
 std::vector<double> RollingQuantile(const std::vector<double>& values, int half, double quantile) {
-  std::vector<double> window;
-  return OverWindows(values, half, [&](auto first, auto last) {
-    window.assign(first, last);
+  const int frames = static_cast<int>(values.size());
+  const int stride = std::max(1, (2 * half + 1 + kMaxQuantileSamples - 1) / kMaxQuantileSamples);
+  std::vector<double> out(frames), window;
+  for (int f = 0; f < frames; ++f) {
+    window.clear();
+    for (int g = std::max(0, f - half); g <= std::min(frames - 1, f + half); g += stride) window.push_back(values[g]);
     const size_t k = static_cast<size_t>(quantile * static_cast<double>(window.size() - 1));
     std::nth_element(window.begin(), window.begin() + k, window.end());
-    return window[k];
-  });
+    out[f] = window[k];
+  }
+  return out;
 }
 
 }  // namespace
