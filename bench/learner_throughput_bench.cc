@@ -35,6 +35,7 @@ ABSL_FLAG(int, discriminator_epochs, 0, "discriminator epochs for the end-to-end
 ABSL_FLAG(int, minibatch_size, 0, "PPO minibatch for the end-to-end measurement (0: the small preset's)");
 ABSL_FLAG(int, update_threads, -1, "torch threads for the updates (-1: the small preset's)");
 ABSL_FLAG(double, amp_reward_weight, -1, "AMP reward weight (-1: the small preset's)");
+ABSL_FLAG(int, amp_frames, -1, "AMP frames the discriminator reads (0: all the server sends; -1: the small preset's)");
 ABSL_FLAG(bool, networks, true, "measure the networks alone");
 ABSL_FLAG(std::vector<std::string>, modes, std::vector<std::string>({"sequential", "during_update"}),
           "end-to-end collection modes to measure side by side: sequential, during_update");
@@ -145,6 +146,7 @@ TrainerConfig EndToEndConfig(const std::string& address) {
   if (absl::GetFlag(FLAGS_discriminator_epochs) > 0) config.discriminator_epochs = absl::GetFlag(FLAGS_discriminator_epochs);
   if (absl::GetFlag(FLAGS_minibatch_size) > 0) config.minibatch_size = absl::GetFlag(FLAGS_minibatch_size);
   if (absl::GetFlag(FLAGS_update_threads) >= 0) config.update_threads = absl::GetFlag(FLAGS_update_threads);
+  if (absl::GetFlag(FLAGS_amp_frames) >= 0) config.model.amp_frames = absl::GetFlag(FLAGS_amp_frames);
   if (absl::GetFlag(FLAGS_amp_reward_weight) >= 0) {
     config.amp_reward_weight = absl::GetFlag(FLAGS_amp_reward_weight);
     config.task_reward_weight = 1 - config.amp_reward_weight;
@@ -196,8 +198,10 @@ int Run() {
   const std::string address = absl::StrCat("127.0.0.1:", (*server)->port());
   const double alone = ServerAlone(address);
   const TrainerConfig config = EndToEndConfig(address);
-  std::printf("\nend to end, 256 envs (2 sessions of 128, 1 server thread each), small preset, %d iterations of %d steps:\n",
-              config.iterations, 256 * config.horizon);
+  std::printf("\nend to end, 256 envs (2 sessions of 128, 1 server thread each), small preset, %d iterations of %d steps, "
+              "%d PPO + %d discriminator epochs, AMP frames read: %s:\n",
+              config.iterations, 256 * config.horizon, config.epochs, config.discriminator_epochs,
+              config.model.amp_frames == 0 ? "all" : std::to_string(config.model.amp_frames).c_str());
   std::printf("  server alone (zero actions over gRPC):  %7.0f env steps/s\n", alone);
   if (int code = MeasureModes(config, alone); code != 0) return code;
   (*server)->Shutdown(absl::Seconds(1));

@@ -23,6 +23,10 @@ struct ModelConfig {
   std::vector<int64_t> critic_hidden;
   std::vector<int64_t> discriminator_hidden;
   double log_std = -2.9;    // fixed Gaussian sigma = exp(-2.9) (PHC)
+  // Frames of the server's AMP history (newest first) the discriminator reads; 0: all of them (the
+  // paper's 10). AMP's own discriminator reads 2 (s, s'); each frame costs the discriminator's
+  // first layer, the update's most expensive matrix.
+  int64_t amp_frames = 0;
   bool whole_body = false;  // ablation: one controller for the whole body (input: all z concatenated + full obs)
   bool attention = true;    // ablation: false -> each part's z comes from its own value map only (attention = identity)
   // What a part's controller reads beside z_k: the part's whole observation (proprioception and
@@ -44,9 +48,9 @@ struct ModelConfig {
   bool task_skill_prior = true;
 
   // "paper": attention {256} -> 64, controllers {2048,1536,1024,512}, critic {2048,1536,1024,512},
-  //          discriminator {1024,512}, task head {2048,1024,512}.
+  //          discriminator {1024,512} over all 10 AMP frames, task head {2048,1024,512}.
   // "small" (fits a 2-core CPU): attention {64} -> 32, controllers {256,128}, critic {256,128},
-  //          discriminator {256,128}, task head {256,128}.
+  //          discriminator {256,128} over the newest 2 AMP frames, task head {256,128}.
   // INVALID_ARGUMENT naming the preset otherwise.
   static absl::StatusOr<ModelConfig> Preset(absl::string_view name);
 };
@@ -65,6 +69,10 @@ struct PartSlices {
 
 struct NetworkLayout {
   int64_t obs_size = 0, action_size = 0, amp_obs_size = 0;
+  // The server's AMP observation: amp_history frames of amp_obs_per_frame floats, newest first.
+  // amp_obs_size is what the discriminator reads, the newest AmpFramesRead(...) of them.
+  int64_t amp_history = 0, amp_obs_per_frame = 0;
+  int64_t wire_amp_obs_size() const { return amp_history * amp_obs_per_frame; }
   std::vector<PartSlices> parts;  // contiguous, in order; obs and action slices each tile [0, size)
   // The env's task (EnvSpec.task; "tracking" where the server sends none). In a task env the
   // goal follows the parts' obs slices (which hold their bodies' self features, and in steer,
@@ -85,6 +93,10 @@ struct NetworkLayout {
 // The layout of the env's observation and action as the server describes it (EnvSpec.parts);
 // check it with Validate before building networks on it.
 NetworkLayout LayoutFromWireSpec(const v1::EnvSpec& spec);
+
+// Sets layout->amp_obs_size to the newest `frames` of the server's AMP history (0: all of them);
+// INVALID_ARGUMENT naming --amp_frames when frames is negative or above the server's history.
+absl::Status ReadAmpFrames(int64_t frames, NetworkLayout* layout);
 
 }  // namespace modskill::learner
 

@@ -209,7 +209,8 @@ absl::StatusOr<std::string> ExportDiscriminatorScorer(AmpDiscriminatorImpl& disc
     module.register_buffer("amp_mean", amp_norm.mean().detach().clone());
     module.register_buffer("amp_var", amp_norm.var().detach().clone());
     RegisterMlp(mlp, "discriminator", &module);
-    std::string src = "def forward(self, amp_obs):\n";
+    // The server scores its full AMP history; the discriminator reads the newest frames of it.
+    std::string src = absl::StrCat("def forward(self, amp_obs):\n    amp_obs = amp_obs[:, 0:", amp_norm.size(), "]\n");
     EmitNormalize("amp_obs", "amp", &src);
     EmitMlp(mlp, "discriminator", "x", "logit", &src);
     absl::StrAppend(&src, "    logit = logit.reshape([-1])\n",

@@ -35,7 +35,9 @@ std::string PolicyScriptSource(const ModSkillPolicyImpl& policy);
 
 // The AMP discriminator as a plausibility scorer for the server's generated clips
 // (ReportFailuresRequest.discriminator): a TorchScript archive whose forward maps RAW AMP
-// observations [N, amp_obs_size] to the AMP style reward max(0, 1 - 0.25 (D - 1)^2) in [0, 1]
+// observations [N, >= amp_norm size] (the server's whole history, newest frame first; the
+// discriminator reads the first amp_norm.size() floats) to the AMP style reward
+// max(0, 1 - 0.25 (D - 1)^2) in [0, 1]
 // (1: indistinguishable from the reference motion), normalization included, as the trainer
 // computes it. Returned as bytes, for sending.
 absl::StatusOr<std::string> ExportDiscriminatorScorer(AmpDiscriminatorImpl& discriminator,

@@ -159,6 +159,19 @@ absl::Status Trainer::WaitForServers() {
   }
 }
 
+absl::Status Trainer::ChooseAmpFrames() {
+  // A run resumed without --amp_frames reads what its checkpoint's discriminator read, so that
+  // checkpoints from before the flag (the whole history) and from a preset with fewer frames resume.
+  if (config_.resume && !config_.amp_frames_given && writes_run_dir() && !data_parallel_ &&
+      layout_.amp_obs_per_frame > 0) {
+    const absl::StatusOr<int64_t> stored = CheckpointAmpObsSize(config_.run_dir + "/checkpoint.pt");
+    if (stored.ok() && *stored % layout_.amp_obs_per_frame == 0) {
+      config_.model.amp_frames = *stored / layout_.amp_obs_per_frame;
+    }
+  }
+  return ReadAmpFrames(config_.model.amp_frames, &layout_);
+}
+
 absl::Status Trainer::BuildNetworks(const v1::EnvSpec& spec) {
   spec_ = spec;
   layout_ = LayoutFromWireSpec(spec);
@@ -169,6 +182,7 @@ absl::Status Trainer::BuildNetworks(const v1::EnvSpec& spec) {
     return absl::FailedPreconditionError(absl::StrCat("--task ", config_.task, ": the server opened a ", layout_.task,
                                                       " session (a server without task envs?)"));
   }
+  if (absl::Status status = ChooseAmpFrames(); !status.ok()) return status;
   if (skills_) {
     if (absl::Status status = skills_->CheckFits(tracking_spec_, spec); !status.ok()) return status;
     config_.model = skills_->ConfigFor(config_.model);

@@ -64,6 +64,9 @@ struct IterationStats {
   int64_t allreduce_bytes = 0;
 };
 
+// The AMP observation size a trainer checkpoint's discriminator was trained on.
+absl::StatusOr<int64_t> CheckpointAmpObsSize(const std::string& path);
+
 class Trainer {
  public:
   static absl::StatusOr<std::unique_ptr<Trainer>> Create(const TrainerConfig& config);
@@ -107,6 +110,9 @@ class Trainer {
   ServerPoolOptions PoolOptions() const;
   absl::Status WaitForServers();
   absl::Status BuildNetworks(const v1::EnvSpec& spec);
+  // How many of the server's AMP frames the discriminator reads (--amp_frames, or on resume the
+  // checkpoint's), set in layout_.amp_obs_size.
+  absl::Status ChooseAmpFrames();
   // Networks, then the resumed checkpoint (rank 0), then the start state shared by every rank.
   absl::Status PrepareState();
   // Seeds of what must differ between data-parallel ranks (sessions, action noise, reference

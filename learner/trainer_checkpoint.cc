@@ -55,6 +55,22 @@ absl::StatusOr<std::string> Trainer::SerializeState() {
   }
 }
 
+absl::StatusOr<int64_t> CheckpointAmpObsSize(const std::string& path) {
+  auto bytes = ReadFileToString(path, size_t{4} << 30);
+  if (!bytes.ok()) return bytes.status();
+  try {
+    torch::serialize::InputArchive archive;
+    std::istringstream in(*bytes, std::ios::binary);
+    archive.load_from(in);
+    torch::Tensor amp_obs_size;
+    archive.read("amp_obs_size", amp_obs_size);
+    return amp_obs_size.item<int64_t>();
+  } catch (const std::exception& e) {
+    std::string message = e.what();
+    return absl::InvalidArgumentError(absl::StrCat(path, ": ", message.substr(0, message.find('\n'))));
+  }
+}
+
 absl::Status Trainer::LoadCheckpoint(const std::string& path) {
   auto bytes = ReadFileToString(path, size_t{4} << 30);
   if (!bytes.ok()) return bytes.status();
@@ -92,7 +108,8 @@ absl::Status Trainer::RestoreState(const std::string& bytes, const std::string& 
       return absl::FailedPreconditionError(
           absl::StrCat(path, ": trained with obs ", obs_size.item<int64_t>(), ", actions ", action_size.item<int64_t>(),
                        ", AMP obs ", amp_obs_size.item<int64_t>(), "; the server has ", layout_.obs_size, ", ",
-                       layout_.action_size, ", ", layout_.amp_obs_size));
+                       layout_.action_size, ", and --amp_frames ", config_.model.amp_frames, " reads ",
+                       layout_.amp_obs_size, " AMP floats"));
     }
     auto load_module = [&](const char* key, torch::nn::Module& module) {
       torch::serialize::InputArchive sub;

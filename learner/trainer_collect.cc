@@ -118,7 +118,7 @@ absl::Status Trainer::RecordStep(SlotRollout& r, int t) {
   auto reward = WireToTorch(result.reward(), "StepResult.reward", v1::FLOAT32, {r.n});
   auto done = WireToTorch(result.done(), "StepResult.done", v1::UINT8, {r.n});
   auto truncated = WireToTorch(result.truncated(), "StepResult.truncated", v1::UINT8, {r.n});
-  auto amp = WireToTorch(result.amp_obs(), "StepResult.amp_obs", v1::FLOAT32, {r.n, layout_.amp_obs_size});
+  auto amp = WireToTorch(result.amp_obs(), "StepResult.amp_obs", v1::FLOAT32, {r.n, layout_.wire_amp_obs_size()});
   auto terms = WireToTorch(result.reward_terms(), "StepResult.reward_terms", v1::FLOAT32,
                            {r.n, spec_.reward_terms_size()});
   for (const auto* tensor : {&reward, &done, &truncated, &amp, &terms}) {
@@ -127,7 +127,7 @@ absl::Status Trainer::RecordStep(SlotRollout& r, int t) {
   r.task_reward[t].copy_(*reward);
   r.dones[t].copy_(*done);
   r.truncated[t].copy_(*truncated);
-  r.amp_next[t].copy_(*amp);
+  r.amp_next[t].copy_(amp->narrow(1, 0, layout_.amp_obs_size));  // the newest frames: what the discriminator reads
   r.reward_terms_sum += terms->to(torch::kFloat64).sum(0);
   auto& returns = episode_return_[slot_index_[r.slot]];
   auto& lengths = episode_length_[slot_index_[r.slot]];

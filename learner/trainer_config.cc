@@ -127,6 +127,7 @@ absl::Status TrainerConfig::Validate() const {
   if (!(gamma > 0 && gamma <= 1)) return bad("gamma", gamma, "must be in (0, 1]");
   if (!(lambda >= 0 && lambda <= 1)) return bad("lambda", lambda, "must be in [0, 1]");
   if (amp_samples < 1) return bad("amp_samples", amp_samples, "must be >= 1");
+  if (model.amp_frames < 0) return bad("amp_frames", model.amp_frames, "must be >= 0 (0: the server's whole AMP history)");
   if (task_reward_weight < 0 || amp_reward_weight < 0) return absl::InvalidArgumentError("reward weights must be >= 0");
   if (!(energy_weight >= 0 && energy_weight <= 100)) return bad("energy_weight", energy_weight, "must be in [0, 100]");
   if (run_dir.empty()) return absl::InvalidArgumentError("--run_dir: required");
@@ -196,6 +197,7 @@ std::string TrainerConfig::ToJson() const {
   json["attention"] = model.attention;
   json["controller_input"] = ControllerInputName(model.controller_input);
   json["embed_dim"] = model.embed_dim;
+  json["amp_frames"] = model.amp_frames;
   json["iterations"] = iterations;
   json["horizon"] = horizon;
   json["epochs"] = epochs;

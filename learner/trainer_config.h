@@ -121,6 +121,9 @@ struct TrainerConfig {
   double gradient_penalty_weight = 5.0;
   int discriminator_epochs = 1;
   int amp_samples = 2048;  // expert and policy samples per discriminator epoch
+  // --amp_frames was given: a resumed checkpoint must have been trained with model.amp_frames.
+  // Otherwise a resumed run reads as many frames as its checkpoint's discriminator did.
+  bool amp_frames_given = false;
   uint64_t seed = 1;
   int report_every = 5;  // iterations between failure reports to the servers' samplers; 0: never
 

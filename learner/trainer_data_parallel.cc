@@ -72,6 +72,7 @@ std::vector<SharedSetting> SharedSettings(const TrainerConfig& c) {
       {"gradient_penalty_weight", Text(c.gradient_penalty_weight)},
       {"discriminator_epochs", Text(c.discriminator_epochs)},
       {"amp_samples", Text(c.amp_samples)},
+      {"amp_frames", Text(m.amp_frames)},
       {"seed", Text(c.seed)},
       {"report_every", Text(c.report_every)},
       {"checkpoint_every", Text(c.checkpoint_every)},

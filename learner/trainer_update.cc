@@ -158,13 +158,14 @@ torch::Tensor Trainer::FetchReferenceAmp(SessionSlot* source) {
     return torch::zeros({0, M});
   }
   absl::StatusOr<torch::Tensor> expert =
-      WireToTorch(reference->amp_obs(), "SampleReferenceAmp.amp_obs", v1::FLOAT32, {config_.amp_samples, M});
+      WireToTorch(reference->amp_obs(), "SampleReferenceAmp.amp_obs", v1::FLOAT32,
+                  {config_.amp_samples, layout_.wire_amp_obs_size()});
   if (!expert.ok()) {
     LogLine("reference AMP samples unusable, discriminator step skipped: %s",
             std::string(expert.status().message()).c_str());
     return torch::zeros({0, M});
   }
-  return *expert;
+  return expert->narrow(1, 0, M).contiguous();
 }
 
 absl::Status Trainer::UpdateDiscriminator(const TrainingBatch& batch, const torch::Tensor& expert,

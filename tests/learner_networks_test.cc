@@ -375,10 +375,15 @@ TEST(LearnerNetworksTest, ExportedDiscriminatorScorerIsTheAmpReward) {
   EXPECT_LT((scored - expected).abs().max().item<float>(), 1e-5);
   EXPECT_GE(scored.min().item<float>(), 0.f);
   EXPECT_LE(scored.max().item<float>(), 1.f);
+  // The server sends its whole AMP history; a discriminator of fewer frames reads the newest.
+  const torch::Tensor older_frames = torch::randn({16, 2 * width}) * 5;
+  const torch::Tensor history = torch::cat({x, older_frames}, 1);
+  EXPECT_TRUE(torch::allclose(module.forward({history}).toTensor(), scored));
 
   auto scorer = DiscriminatorScorer::LoadBytes(*bytes, width);
   ASSERT_TRUE(scorer.ok()) << scorer.status();
-  EXPECT_EQ(DiscriminatorScorer::LoadBytes(*bytes, width + 1).status().code(), absl::StatusCode::kInvalidArgument);
+  // A server with a shorter AMP history than the discriminator reads cannot use it.
+  EXPECT_EQ(DiscriminatorScorer::LoadBytes(*bytes, width - 1).status().code(), absl::StatusCode::kInvalidArgument);
   EXPECT_THAT(std::string(DiscriminatorScorer::LoadBytes("not torchscript", width).status().message()),
               HasSubstr("discriminator"));
   RunningMeanStd wrong(10);

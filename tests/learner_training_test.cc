@@ -203,6 +203,50 @@ TEST(LearnerTrainingTest, CheckpointRoundTripAndResume) {
   server->Shutdown(absl::Seconds(1));
 }
 
+// --amp_frames: the discriminator reads the newest frames of the server's AMP history, its
+// checkpoint records the width, and a resumed run reads as many frames unless told otherwise,
+// which is refused naming the flag.
+TEST(LearnerTrainingTest, DiscriminatorReadsTheNewestAmpFramesAcrossAResume) {
+  auto server = StartTestServer();
+  const std::string dir = RunDir("amp_frames");
+  TrainerConfig config = SmallConfig({server->port()}, dir);
+  config.iterations = 1;
+  config.model.amp_frames = 2;
+  auto first = Trainer::Create(config);
+  ASSERT_TRUE(first.ok()) << first.status();
+  ASSERT_TRUE((*first)->Run().ok());
+  const auto input_width = [](Trainer& trainer) { return trainer.discriminator()->mlp()->layers().front()->weight.size(1); };
+  constexpr int64_t per_frame = 232;  // the 24-body humanoid's AMP features per frame
+  EXPECT_EQ(input_width(**first), 2 * per_frame);
+  const IterationStats& stats = (*first)->history().back();
+  EXPECT_TRUE(std::isfinite(stats.discriminator_loss));
+  EXPECT_NE(stats.discriminator_loss, 0) << "the discriminator stepped";
+  EXPECT_EQ(*CheckpointAmpObsSize(dir + "/checkpoint.pt"), 2 * per_frame);
+
+  config.resume = true;
+  config.model.amp_frames = 0;  // the preset's: a resumed run keeps its checkpoint's frames
+  auto resumed = Trainer::Create(config);
+  ASSERT_TRUE(resumed.ok()) << resumed.status();
+  EXPECT_EQ(input_width(**resumed), 2 * per_frame);
+  EXPECT_EQ((*resumed)->config().model.amp_frames, 2);
+  ASSERT_TRUE((*resumed)->Run().ok());
+
+  config.model.amp_frames = 3;
+  config.amp_frames_given = true;
+  auto refused = Trainer::Create(config);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.status().code(), absl::StatusCode::kFailedPrecondition);
+  EXPECT_THAT(std::string(refused.status().message()), HasSubstr("--amp_frames 3"));
+
+  TrainerConfig too_many = SmallConfig({server->port()}, RunDir("amp_frames_too_many"));
+  too_many.model.amp_frames = 11;
+  auto beyond = Trainer::Create(too_many);
+  ASSERT_FALSE(beyond.ok());
+  EXPECT_EQ(beyond.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(std::string(beyond.status().message()), HasSubstr("--amp_frames: 11 is not in [0, 10]"));
+  server->Shutdown(absl::Seconds(1));
+}
+
 // --normalize_value: the critic learns returns in units of their running statistics, which the
 // update fills; a resumed run keeps the checkpoint's mode whatever the flag says, so its critic's
 // outputs keep their meaning.
@@ -372,6 +416,7 @@ TEST(LearnerTrainingTest, BadConfigurationsAreClearErrors) {
       {[&](TrainerConfig* c) { c->learning_rate_floor = nan; }, "--learning_rate_floor"},
       {[](TrainerConfig* c) { c->energy_weight = -1; }, "--energy_weight"},
       {[&](TrainerConfig* c) { c->energy_weight = nan; }, "--energy_weight"},
+      {[](TrainerConfig* c) { c->model.amp_frames = -2; }, "--amp_frames"},
       {[](TrainerConfig* c) { c->curriculum_start = 0.25, c->curriculum_end = 1.0; }, "--termination_curriculum"},
       {[&](TrainerConfig* c) { c->curriculum_start = nan, c->curriculum_end = 0.25; }, "--termination_curriculum"},
       {[](TrainerConfig* c) {

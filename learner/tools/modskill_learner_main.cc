@@ -107,6 +107,9 @@ ABSL_FLAG(int, horizon, 32, "steps per env per iteration");
 ABSL_FLAG(int, epochs, 0, "PPO epochs per iteration (0: the preset's)");
 ABSL_FLAG(int, minibatch_size, 0, "PPO minibatch (0: the preset's)");
 ABSL_FLAG(int, discriminator_epochs, 0, "AMP discriminator epochs per iteration (0: the preset's)");
+ABSL_FLAG(int, amp_frames, -1,
+          "frames of the server's AMP history the discriminator reads, newest first (0: all of them; -1: the "
+          "preset's, or the resumed checkpoint's)");
 ABSL_FLAG(double, learning_rate, 0, "Adam learning rate (0: the preset's)");
 ABSL_FLAG(int64_t, learning_rate_decay_steps, 0,
           "decay --learning_rate linearly to --learning_rate_floor x it over this many env steps (0: constant)");
@@ -387,6 +390,10 @@ absl::StatusOr<TrainerConfig> ConfigFromFlags(const std::string& token) {
   config->horizon = absl::GetFlag(FLAGS_horizon);
   if (absl::GetFlag(FLAGS_epochs) > 0) config->epochs = absl::GetFlag(FLAGS_epochs);
   if (absl::GetFlag(FLAGS_discriminator_epochs) > 0) config->discriminator_epochs = absl::GetFlag(FLAGS_discriminator_epochs);
+  if (const int frames = absl::GetFlag(FLAGS_amp_frames); frames != -1) {
+    config->model.amp_frames = frames;
+    config->amp_frames_given = true;
+  }
   if (absl::GetFlag(FLAGS_minibatch_size) > 0) config->minibatch_size = absl::GetFlag(FLAGS_minibatch_size);
   if (absl::GetFlag(FLAGS_learning_rate) > 0) config->learning_rate = absl::GetFlag(FLAGS_learning_rate);
   config->learning_rate_decay_steps = absl::GetFlag(FLAGS_learning_rate_decay_steps);
