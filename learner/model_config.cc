@@ -21,8 +21,8 @@ absl::StatusOr<ModelConfig> ModelConfig::Preset(absl::string_view name) {
     config.critic_hidden = {256, 128};
     config.discriminator_hidden = {256, 128};
     config.task_hidden = {256, 128};
-    // The newest 2 of 10 AMP frames: the update 0.94 -> 0.65 s per 8,192 steps, the same
-    // learning at 1 M steps on the walk and cmu_02_01 (README, "Learning").
+    // The newest 2 of 10 AMP frames: the update 0.97-1.00 -> 0.68-0.79 s per 8,192 steps; at
+    // 1 M steps the walk learns alike and cmu_02_01 evaluates closer (README, "Learning").
     config.amp_frames = 2;
   } else {
     return absl::InvalidArgumentError(

@@ -70,7 +70,7 @@ struct PartSlices {
 struct NetworkLayout {
   int64_t obs_size = 0, action_size = 0, amp_obs_size = 0;
   // The server's AMP observation: amp_history frames of amp_obs_per_frame floats, newest first.
-  // amp_obs_size is what the discriminator reads, the newest AmpFramesRead(...) of them.
+  // amp_obs_size is what the discriminator reads: the newest frames, as ReadAmpFrames sets it.
   int64_t amp_history = 0, amp_obs_per_frame = 0;
   int64_t wire_amp_obs_size() const { return amp_history * amp_obs_per_frame; }
   std::vector<PartSlices> parts;  // contiguous, in order; obs and action slices each tile [0, size)
