@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
 #include "common/log.h"
 #include "common/wire/tensor_codec.h"
 #include "learner/policy_export.h"
@@ -199,6 +200,23 @@ absl::Status Trainer::RecordEpisodeEnds(SessionSlot* slot, const v1::StepResult&
   return absl::OkStatus();
 }
 
+namespace {
+
+// "a 9.5 %, b 8.7 %, ... (uniform 5.0 %)": where a session's adaptive sampler puts its mass.
+std::string MostSampledClips(const v1::SamplerState& state) {
+  std::vector<std::pair<double, std::string>> clips;
+  for (const v1::ClipSamplingState& clip : state.clips()) clips.emplace_back(clip.probability(), clip.clip());
+  std::sort(clips.rbegin(), clips.rend());
+  std::string text;
+  for (size_t k = 0; k < std::min<size_t>(5, clips.size()); ++k) {
+    absl::StrAppend(&text, k ? ", " : "", clips[k].second, " ", absl::StrFormat("%.1f %%", 100 * clips[k].first));
+  }
+  if (!clips.empty()) absl::StrAppend(&text, absl::StrFormat(" (uniform %.1f %%)", 100.0 / clips.size()));
+  return text;
+}
+
+}  // namespace
+
 void Trainer::ReportFailures() {
   // The discriminator goes along, so the servers can hold generated clips to ModSkill's rule.
   std::string discriminator;
@@ -210,6 +228,7 @@ void Trainer::ReportFailures() {
       LogLine("discriminator not sent: %s", scorer.status().message());
     }
   }
+  bool sampler_logged = false;
   for (SessionSlot* slot : servers_->Alive()) {
     PendingReports& pending = pending_reports_[slot];
     if (pending.generation != slot->generation || pending.failures.empty()) continue;
@@ -219,7 +238,12 @@ void Trainer::ReportFailures() {
     for (v1::ClipFailure& failure : pending.failures) *request.add_failures() = std::move(failure);
     pending.failures.clear();
     auto state = slot->client->ReportFailures(request);
-    if (!state.ok()) LogLine("failure report to %s not taken: %s", slot->server, state.status().message());
+    if (!state.ok()) {
+      LogLine("failure report to %s not taken: %s", slot->server, state.status().message());
+    } else if (!sampler_logged) {  // the first session that answers; each has its own sampler
+      LogLine("sampler of %s: %s", slot->server, MostSampledClips(*state));
+      sampler_logged = true;
+    }
   }
   // The hardest clips so far: highest failure rate among those seen at least 5 times.
   std::vector<std::pair<double, std::string>> rates;
