@@ -2,8 +2,10 @@
 // and the shipped policy export.
 #include <sstream>
 #include <string>
+#include <tuple>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_join.h"
 #include "common/atomic_file.h"
 #include "common/log.h"
 #include "learner/evaluation.h"
@@ -46,6 +48,8 @@ absl::StatusOr<std::string> Trainer::SerializeState() {
     archive.write("termination_distance", torch::tensor(curriculum_.distance(), torch::kFloat64));
     archive.write("task", c10::IValue(layout_.task));
     archive.write("world_size", torch::tensor(static_cast<int64_t>(config_.data_parallel.world_size)));
+    archive.write("controller_hidden", torch::tensor(config_.model.controller_hidden, torch::kInt64));
+    archive.write("critic_hidden", torch::tensor(config_.model.critic_hidden, torch::kInt64));
     std::ostringstream out(std::ios::binary);
     archive.save_to(out);
     return out.str();
@@ -110,6 +114,21 @@ absl::Status Trainer::RestoreState(const std::string& bytes, const std::string& 
                        ", AMP obs ", amp_obs_size.item<int64_t>(), "; the server has ", layout_.obs_size, ", ",
                        layout_.action_size, ", and --amp_frames ", config_.model.amp_frames, " reads ",
                        layout_.amp_obs_size, " AMP floats"));
+    }
+    // Network widths (--controller_hidden, --critic_hidden): checkpoints from before the flags
+    // have none stored and fail below, at the first tensor whose shape differs.
+    for (const auto& [key, flag, sizes] :
+         {std::tuple{"controller_hidden", "--controller_hidden", &config_.model.controller_hidden},
+          std::tuple{"critic_hidden", "--critic_hidden", &config_.model.critic_hidden}}) {
+      torch::Tensor stored;
+      if (!archive.try_read(key, stored)) continue;
+      const std::vector<int64_t> trained(stored.data_ptr<int64_t>(), stored.data_ptr<int64_t>() + stored.numel());
+      if (trained != *sizes) {
+        return absl::FailedPreconditionError(absl::StrCat(path, ": trained with ", flag, " ",
+                                                          absl::StrJoin(trained, ","), "; resume with ", flag, " ",
+                                                          absl::StrJoin(trained, ","), ", not ",
+                                                          absl::StrJoin(*sizes, ",")));
+      }
     }
     auto load_module = [&](const char* key, torch::nn::Module& module) {
       torch::serialize::InputArchive sub;

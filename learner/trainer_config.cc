@@ -54,8 +54,14 @@ absl::Status ValidateTask(const TrainerConfig& c) {
   if (!(std::isfinite(c.model.task_log_std) && c.model.task_log_std > -20 && c.model.task_log_std < 2)) {
     return absl::InvalidArgumentError(absl::StrCat("--task_log_std: ", c.model.task_log_std, " must be in (-20, 2)"));
   }
-  for (int64_t size : c.model.task_hidden) {
-    if (size < 1) return absl::InvalidArgumentError(absl::StrCat("--task_hidden: ", size, " must be >= 1"));
+  for (const auto& [flag, sizes] : {std::pair{"--task_hidden", &c.model.task_hidden},
+                                    std::pair{"--controller_hidden", &c.model.controller_hidden},
+                                    std::pair{"--critic_hidden", &c.model.critic_hidden}}) {
+    for (int64_t size : *sizes) {
+      if (size < 1 || size > 65536) {
+        return absl::InvalidArgumentError(absl::StrCat(flag, ": ", size, " must be in [1, 65536]"));
+      }
+    }
   }
   // The server's bounds (TaskSettings in modskill.proto), checked here too: a session the
   // server refuses would only be retried until --server_timeout_s.
@@ -197,6 +203,8 @@ std::string TrainerConfig::ToJson() const {
   json["attention"] = model.attention;
   json["controller_input"] = ControllerInputName(model.controller_input);
   json["embed_dim"] = model.embed_dim;
+  json["controller_hidden"] = model.controller_hidden;
+  json["critic_hidden"] = model.critic_hidden;
   json["amp_frames"] = model.amp_frames;
   json["iterations"] = iterations;
   json["horizon"] = horizon;

@@ -247,6 +247,39 @@ TEST(LearnerTrainingTest, DiscriminatorReadsTheNewestAmpFramesAcrossAResume) {
   server->Shutdown(absl::Seconds(1));
 }
 
+// --controller_hidden / --critic_hidden: the widths build the networks, travel in the
+// checkpoint, and a resume with other widths is refused with the flag to repeat.
+TEST(LearnerTrainingTest, NetworkWidthsTrainAndResumeOnlyWithTheirOwn) {
+  auto server = StartTestServer();
+  const std::string dir = RunDir("network_widths");
+  TrainerConfig config = SmallConfig({server->port()}, dir);
+  config.iterations = 1;
+  config.model.controller_hidden = {48, 24};
+  config.model.critic_hidden = {40};
+  auto first = Trainer::Create(config);
+  ASSERT_TRUE(first.ok()) << first.status();
+  ASSERT_TRUE((*first)->Run().ok());
+  for (const PartController& controller : (*first)->policy()->controllers()) {
+    ASSERT_EQ(controller->mlp()->layers().size(), 3u);
+    EXPECT_EQ(controller->mlp()->layers()[0]->weight.size(0), 48);
+    EXPECT_EQ(controller->mlp()->layers()[1]->weight.size(0), 24);
+  }
+  EXPECT_EQ((*first)->critic()->parameters().front().size(0), 40) << "the first layer of the critic's MLP";
+
+  config.resume = true;
+  auto same = Trainer::Create(config);
+  ASSERT_TRUE(same.ok()) << same.status();
+  ASSERT_TRUE((*same)->Run().ok());
+
+  TrainerConfig preset_widths = SmallConfig({server->port()}, dir);
+  preset_widths.resume = true;
+  auto refused = Trainer::Create(preset_widths);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.status().code(), absl::StatusCode::kFailedPrecondition);
+  EXPECT_THAT(std::string(refused.status().message()), HasSubstr("resume with --controller_hidden 48,24, not 256,128"));
+  server->Shutdown(absl::Seconds(1));
+}
+
 // --normalize_value: the critic learns returns in units of their running statistics, which the
 // update fills; a resumed run keeps the checkpoint's mode whatever the flag says, so its critic's
 // outputs keep their meaning.
@@ -417,6 +450,8 @@ TEST(LearnerTrainingTest, BadConfigurationsAreClearErrors) {
       {[](TrainerConfig* c) { c->energy_weight = -1; }, "--energy_weight"},
       {[&](TrainerConfig* c) { c->energy_weight = nan; }, "--energy_weight"},
       {[](TrainerConfig* c) { c->model.amp_frames = -2; }, "--amp_frames"},
+      {[](TrainerConfig* c) { c->model.controller_hidden = {256, 0}; }, "--controller_hidden"},
+      {[](TrainerConfig* c) { c->model.critic_hidden = {-3}; }, "--critic_hidden"},
       {[](TrainerConfig* c) { c->curriculum_start = 0.25, c->curriculum_end = 1.0; }, "--termination_curriculum"},
       {[&](TrainerConfig* c) { c->curriculum_start = nan, c->curriculum_end = 0.25; }, "--termination_curriculum"},
       {[](TrainerConfig* c) {

@@ -17,6 +17,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "absl/flags/flag.h"
@@ -95,6 +96,11 @@ ABSL_FLAG(bool, task_skill_prior, true,
           "the anchored base motion (false: z = normalize(task head), the paper's high level)");
 ABSL_FLAG(std::vector<std::string>, task_hidden, {},
           "--task: hidden sizes of the task head, e.g. 2048,1024,512 (default: the preset's; small 256,128)");
+ABSL_FLAG(std::vector<std::string>, controller_hidden, {},
+          "hidden sizes of each part's controller, e.g. 512,256 (default: the preset's; small 256,128, paper "
+          "2048,1536,1024,512); a --resume repeats the run's own");
+ABSL_FLAG(std::vector<std::string>, critic_hidden, {},
+          "hidden sizes of the critic, e.g. 512,256 (default: the preset's; small 256,128)");
 ABSL_FLAG(double, task_min_speed, 0, "steer: lowest target speed, m/s (0: the server's default, 0.5)");
 ABSL_FLAG(double, task_max_speed, 0, "steer: highest target speed, m/s (0: the server's default, 3)");
 ABSL_FLAG(double, task_min_goal_interval_s, 0, "steer, reach: shortest time between goals, s (0: default 2)");
@@ -335,6 +341,21 @@ absl::StatusOr<std::vector<int64_t>> ParseMilestones(const std::vector<std::stri
   return steps;
 }
 
+// A comma list of layer widths replaces `sizes`; empty leaves the preset's.
+absl::Status HiddenSizesFromFlag(absl::string_view flag, const std::vector<std::string>& values,
+                                 std::vector<int64_t>* sizes) {
+  if (values.empty()) return absl::OkStatus();
+  sizes->clear();
+  for (const std::string& size : values) {
+    int64_t value = 0;
+    if (!absl::SimpleAtoi(size, &value)) {
+      return absl::InvalidArgumentError(absl::StrCat(flag, ": '", size.substr(0, 32), "' is not a size"));
+    }
+    sizes->push_back(value);
+  }
+  return absl::OkStatus();
+}
+
 // --task, --skills, the task head and the task's settings.
 absl::Status TaskFromFlags(TrainerConfig* config) {
   config->task = absl::GetFlag(FLAGS_task);
@@ -350,15 +371,10 @@ absl::Status TaskFromFlags(TrainerConfig* config) {
   config->frozen_parts_act_on_mean = absl::GetFlag(FLAGS_frozen_parts_act_on_mean);
   config->train_attention = absl::GetFlag(FLAGS_train_attention);
   config->fresh_parts = absl::GetFlag(FLAGS_fresh_parts);
-  if (const std::vector<std::string> hidden = absl::GetFlag(FLAGS_task_hidden); !hidden.empty()) {
-    config->model.task_hidden.clear();
-    for (const std::string& size : hidden) {
-      int64_t value = 0;
-      if (!absl::SimpleAtoi(size, &value)) {
-        return absl::InvalidArgumentError(absl::StrCat("--task_hidden: '", size.substr(0, 32), "' is not a size"));
-      }
-      config->model.task_hidden.push_back(value);
-    }
+  if (absl::Status status = HiddenSizesFromFlag("--task_hidden", absl::GetFlag(FLAGS_task_hidden),
+                                                 &config->model.task_hidden);
+      !status.ok()) {
+    return status;
   }
   config->task_min_speed = absl::GetFlag(FLAGS_task_min_speed);
   config->task_max_speed = absl::GetFlag(FLAGS_task_max_speed);
@@ -387,6 +403,11 @@ absl::StatusOr<TrainerConfig> ConfigFromFlags(const std::string& token) {
   if (!controller_input.ok()) return controller_input.status();
   config->model.controller_input = *controller_input;
   if (absl::Status status = TaskFromFlags(&*config); !status.ok()) return status;
+  for (const auto& [flag, values, sizes] :
+       {std::tuple{"--controller_hidden", absl::GetFlag(FLAGS_controller_hidden), &config->model.controller_hidden},
+        std::tuple{"--critic_hidden", absl::GetFlag(FLAGS_critic_hidden), &config->model.critic_hidden}}) {
+    if (absl::Status status = HiddenSizesFromFlag(flag, values, sizes); !status.ok()) return status;
+  }
   config->horizon = absl::GetFlag(FLAGS_horizon);
   if (absl::GetFlag(FLAGS_epochs) > 0) config->epochs = absl::GetFlag(FLAGS_epochs);
   if (absl::GetFlag(FLAGS_discriminator_epochs) > 0) config->discriminator_epochs = absl::GetFlag(FLAGS_discriminator_epochs);
