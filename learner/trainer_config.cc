@@ -13,6 +13,14 @@
 namespace modskill::learner {
 namespace {
 
+// Hidden layer widths from a flag: each in [1, 65536].
+absl::Status ValidateWidths(absl::string_view flag, const std::vector<int64_t>& sizes) {
+  for (int64_t size : sizes) {
+    if (size < 1 || size > 65536) return absl::InvalidArgumentError(absl::StrCat(flag, ": ", size, " must be in [1, 65536]"));
+  }
+  return absl::OkStatus();
+}
+
 // --task, --skills and the task's settings and sizes; the task's name is checked against the
 // server's list when the trainer starts.
 absl::Status ValidateTask(const TrainerConfig& c) {
@@ -54,15 +62,7 @@ absl::Status ValidateTask(const TrainerConfig& c) {
   if (!(std::isfinite(c.model.task_log_std) && c.model.task_log_std > -20 && c.model.task_log_std < 2)) {
     return absl::InvalidArgumentError(absl::StrCat("--task_log_std: ", c.model.task_log_std, " must be in (-20, 2)"));
   }
-  for (const auto& [flag, sizes] : {std::pair{"--task_hidden", &c.model.task_hidden},
-                                    std::pair{"--controller_hidden", &c.model.controller_hidden},
-                                    std::pair{"--critic_hidden", &c.model.critic_hidden}}) {
-    for (int64_t size : *sizes) {
-      if (size < 1 || size > 65536) {
-        return absl::InvalidArgumentError(absl::StrCat(flag, ": ", size, " must be in [1, 65536]"));
-      }
-    }
-  }
+  if (absl::Status status = ValidateWidths("--task_hidden", c.model.task_hidden); !status.ok()) return status;
   // The server's bounds (TaskSettings in modskill.proto), checked here too: a session the
   // server refuses would only be retried until --server_timeout_s.
   for (const auto& [flag, value, limit] :
@@ -153,6 +153,10 @@ absl::Status TrainerConfig::Validate() const {
     return absl::InvalidArgumentError(absl::StrCat("--termination_bodies: ", bodies.status().message()));
   }
   if (absl::Status status = ValidateTask(*this); !status.ok()) return status;
+  for (const auto& [flag, sizes] : {std::pair{"--controller_hidden", &model.controller_hidden},
+                                    std::pair{"--critic_hidden", &model.critic_hidden}}) {
+    if (absl::Status status = ValidateWidths(flag, *sizes); !status.ok()) return status;
+  }
   if (absl::Status status = ValidateDataParallelOptions(data_parallel); !status.ok()) return status;
   if (curriculum_start != 0 || curriculum_end != 0) {
     if (!ValidateTerminationDistance(curriculum_start).ok() || !ValidateTerminationDistance(curriculum_end).ok()) {
