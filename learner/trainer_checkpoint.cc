@@ -75,6 +75,46 @@ absl::StatusOr<int64_t> CheckpointAmpObsSize(const std::string& path) {
   }
 }
 
+namespace {
+
+// --action_mode and --residual_scale against the checkpoint's; checkpoints from before action
+// modes were trained in absolute mode.
+absl::Status CheckStoredActionMode(torch::serialize::InputArchive& archive, ActionMode mode, double scale,
+                                   const std::string& path) {
+  torch::Tensor action_mode = torch::tensor(static_cast<int64_t>(ActionMode::kAbsolute));
+  torch::Tensor residual_scale = torch::tensor(scale, torch::kFloat64);
+  archive.try_read("action_mode", action_mode);
+  archive.try_read("residual_scale", residual_scale);
+  const auto trained_mode = static_cast<ActionMode>(action_mode.item<int64_t>());
+  if (trained_mode != mode || (trained_mode == ActionMode::kResidual && residual_scale.item<double>() != scale)) {
+    return absl::FailedPreconditionError(absl::StrCat(
+        path, ": trained with --action_mode ", ActionModeName(trained_mode),
+        trained_mode == ActionMode::kResidual ? absl::StrCat(" --residual_scale ", residual_scale.item<double>()) : "",
+        "; resume with the same flags"));
+  }
+  return absl::OkStatus();
+}
+
+// Network widths (--controller_hidden, --critic_hidden) against the checkpoint's. Checkpoints
+// from before the flags store none and fail later, at the first tensor whose shape differs.
+absl::Status CheckStoredWidths(torch::serialize::InputArchive& archive, const ModelConfig& model,
+                               const std::string& path) {
+  for (const auto& [key, flag, sizes] : {std::tuple{"controller_hidden", "--controller_hidden", &model.controller_hidden},
+                                         std::tuple{"critic_hidden", "--critic_hidden", &model.critic_hidden}}) {
+    torch::Tensor stored;
+    if (!archive.try_read(key, stored)) continue;
+    const std::vector<int64_t> trained(stored.data_ptr<int64_t>(), stored.data_ptr<int64_t>() + stored.numel());
+    if (trained != *sizes) {
+      return absl::FailedPreconditionError(absl::StrCat(path, ": trained with ", flag, " ", absl::StrJoin(trained, ","),
+                                                        "; resume with ", flag, " ", absl::StrJoin(trained, ","),
+                                                        ", not ", absl::StrJoin(*sizes, ",")));
+    }
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace
+
 absl::Status Trainer::LoadCheckpoint(const std::string& path) {
   auto bytes = ReadFileToString(path, size_t{4} << 30);
   if (!bytes.ok()) return bytes.status();
@@ -115,38 +155,15 @@ absl::Status Trainer::RestoreState(const std::string& bytes, const std::string& 
                        layout_.action_size, ", and --amp_frames ", config_.model.amp_frames, " reads ",
                        layout_.amp_obs_size, " AMP floats"));
     }
-    // Network widths (--controller_hidden, --critic_hidden): checkpoints from before the flags
-    // have none stored and fail below, at the first tensor whose shape differs.
-    for (const auto& [key, flag, sizes] :
-         {std::tuple{"controller_hidden", "--controller_hidden", &config_.model.controller_hidden},
-          std::tuple{"critic_hidden", "--critic_hidden", &config_.model.critic_hidden}}) {
-      torch::Tensor stored;
-      if (!archive.try_read(key, stored)) continue;
-      const std::vector<int64_t> trained(stored.data_ptr<int64_t>(), stored.data_ptr<int64_t>() + stored.numel());
-      if (trained != *sizes) {
-        return absl::FailedPreconditionError(absl::StrCat(path, ": trained with ", flag, " ",
-                                                          absl::StrJoin(trained, ","), "; resume with ", flag, " ",
-                                                          absl::StrJoin(trained, ","), ", not ",
-                                                          absl::StrJoin(*sizes, ",")));
-      }
-    }
+    if (absl::Status status = CheckStoredWidths(archive, config_.model, path); !status.ok()) return status;
     auto load_module = [&](const char* key, torch::nn::Module& module) {
       torch::serialize::InputArchive sub;
       archive.read(key, sub);
       module.load(sub);
     };
-    // Checkpoints from before action modes were trained in absolute mode.
-    torch::Tensor action_mode = torch::tensor(static_cast<int64_t>(ActionMode::kAbsolute));
-    torch::Tensor residual_scale = torch::tensor(config_.residual_scale, torch::kFloat64);
-    archive.try_read("action_mode", action_mode);
-    archive.try_read("residual_scale", residual_scale);
-    const auto trained_mode = static_cast<ActionMode>(action_mode.item<int64_t>());
-    if (trained_mode != ActionModeOf(config_) ||
-        (trained_mode == ActionMode::kResidual && residual_scale.item<double>() != config_.residual_scale)) {
-      return absl::FailedPreconditionError(absl::StrCat(
-          path, ": trained with --action_mode ", ActionModeName(trained_mode),
-          trained_mode == ActionMode::kResidual ? absl::StrCat(" --residual_scale ", residual_scale.item<double>()) : "",
-          "; resume with the same flags"));
+    if (absl::Status status = CheckStoredActionMode(archive, ActionModeOf(config_), config_.residual_scale, path);
+        !status.ok()) {
+      return status;
     }
     load_module("policy", *policy_);
     load_module("critic", *critic_);
