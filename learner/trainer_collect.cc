@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "absl/functional/function_ref.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "common/log.h"
@@ -202,17 +203,25 @@ absl::Status Trainer::RecordEpisodeEnds(SessionSlot* slot, const v1::StepResult&
 
 namespace {
 
+// "a 96%, b 89%, ...": the five clips with the largest shares, largest first, each share as
+// `percent` writes it.
+std::string FiveLargestShares(std::vector<std::pair<double, std::string>> shares,
+                              absl::FunctionRef<std::string(double)> percent) {
+  std::sort(shares.rbegin(), shares.rend());
+  std::string text;
+  for (size_t k = 0; k < std::min<size_t>(5, shares.size()); ++k) {
+    absl::StrAppend(&text, k ? ", " : "", shares[k].second, " ", percent(shares[k].first));
+  }
+  return text;
+}
+
 // "a 9.5 %, b 8.7 %, ... (uniform 5.0 %)": where a session's adaptive sampler puts its mass.
 std::string MostSampledClips(const v1::SamplerState& state) {
   std::vector<std::pair<double, std::string>> clips;
   for (const v1::ClipSamplingState& clip : state.clips()) clips.emplace_back(clip.probability(), clip.clip());
-  std::sort(clips.rbegin(), clips.rend());
-  std::string text;
-  for (size_t k = 0; k < std::min<size_t>(5, clips.size()); ++k) {
-    absl::StrAppend(&text, k ? ", " : "", clips[k].second, " ", absl::StrFormat("%.1f %%", 100 * clips[k].first));
-  }
-  if (!clips.empty()) absl::StrAppend(&text, absl::StrFormat(" (uniform %.1f %%)", 100.0 / clips.size()));
-  return text;
+  if (clips.empty()) return "";
+  return absl::StrCat(FiveLargestShares(clips, [](double p) { return absl::StrFormat("%.1f %%", 100 * p); }),
+                      absl::StrFormat(" (uniform %.1f %%)", 100.0 / clips.size()));
 }
 
 }  // namespace
@@ -251,11 +260,8 @@ void Trainer::ReportFailures() {
     const int64_t total = outcome.first + outcome.second;
     if (total >= 5) rates.emplace_back(static_cast<double>(outcome.first) / total, clip);
   }
-  std::sort(rates.rbegin(), rates.rend());
-  std::string hardest;
-  for (size_t k = 0; k < std::min<size_t>(5, rates.size()); ++k) {
-    absl::StrAppend(&hardest, k ? ", " : "", rates[k].second, " ", static_cast<int>(100 * rates[k].first), "%");
-  }
+  const std::string hardest = FiveLargestShares(
+      std::move(rates), [](double rate) { return absl::StrCat(static_cast<int>(100 * rate), "%"); });
   if (!hardest.empty()) LogLine("hardest clips (episodes failed): %s", hardest);
 }
 
