@@ -31,6 +31,18 @@ absl::StatusOr<ModelConfig> ModelConfig::Preset(absl::string_view name) {
   return config;
 }
 
+ModelConfig ModelConfig::WithPolicyShapeOf(const ModelConfig& policy) const {
+  ModelConfig config = *this;
+  config.attention_hidden = policy.attention_hidden;
+  config.embed_dim = policy.embed_dim;
+  config.controller_hidden = policy.controller_hidden;
+  config.controller_input = policy.controller_input;
+  config.log_std = policy.log_std;
+  config.whole_body = policy.whole_body;
+  config.attention = policy.attention;
+  return config;
+}
+
 namespace {
 
 // Checks that the slices [start, start + size) of the parts tile [0, total) in part order.

@@ -53,6 +53,12 @@ struct ModelConfig {
   //          discriminator {256,128} over the newest 2 AMP frames, task head {256,128}.
   // INVALID_ARGUMENT naming the preset otherwise.
   static absl::StatusOr<ModelConfig> Preset(absl::string_view name);
+
+  // This config with the tracking policy's shape taken from `policy` (attention maps, embedding,
+  // controllers and what they read, sigma, the ablations); the critic's, discriminator's and task
+  // head's settings stay. A run that starts from another policy (--init_from) records the
+  // networks it actually built.
+  ModelConfig WithPolicyShapeOf(const ModelConfig& policy) const;
 };
 
 // "part_obs" or "proprioception" (--controller_input); INVALID_ARGUMENT naming the value otherwise.

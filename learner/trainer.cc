@@ -201,7 +201,7 @@ absl::Status Trainer::BuildNetworks(const v1::EnvSpec& spec) {
     if (!tracker.ok()) return tracker.status();
     policy_ = tracker->policy;
     obs_norm_ = tracker->obs_norm;
-    config_.model.controller_hidden = policy_->config().controller_hidden;  // the checkpoint records the tracker's
+    config_.model = config_.model.WithPolicyShapeOf(policy_->config());  // config.json and the checkpoint record it
     if (config_.frozen_parts_act_on_mean) {
       // The frozen parts act as they do in evaluation, so their noise does not blur the
       // retrained parts' returns; their dims then leave PPO's ratios.

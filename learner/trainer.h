@@ -183,9 +183,10 @@ class Trainer {
   absl::Status SummarizeEpisodes(IterationStats* stats);
   void Summarize(const TrainingBatch& batch, IterationStats* stats);
   // Notes how the episodes that ended in `result` went, for the session's failure report;
-  // `done` and `truncated` are the result's flags as RecordStep decoded them (one per env).
+  // `done` and `truncated` are the result's flags as RecordStep decoded them (one per env),
+  // `ended_lengths` the control steps of each episode that ended.
   absl::Status RecordEpisodeEnds(SessionSlot* slot, const v1::StepResult& result, const float* done,
-                                 const float* truncated);
+                                 const float* truncated, const std::vector<int>& ended_lengths);
   // Sends each live session its failure list and logs the hardest clips.
   void ReportFailures();
   // Task runs: the normalized return of the episodes that ended in `collection`.

@@ -140,11 +140,13 @@ absl::Status Trainer::RecordStep(SlotRollout& r, int t) {
   const float* reward_data = reward_contiguous.data_ptr<float>();
   const float* done_data = done->data_ptr<float>();
   const float* truncated_data = truncated->data_ptr<float>();
+  std::vector<int> ended_lengths(r.n, 0);
   for (int i = 0; i < r.n; ++i) {
     returns[i] += reward_data[i];
     ++lengths[i];
     if (goal_data != nullptr) goal_returns[i] += goal_data[i];
     if (done_data[i] > 0.5f) {
+      ended_lengths[i] = lengths[i];
       recent_returns_.push_back(returns[i]);
       recent_lengths_.push_back(lengths[i]);
       recent_tracked_.push_back(truncated_data[i] > 0.5f ? 1.0 : 0.0);
@@ -155,12 +157,12 @@ absl::Status Trainer::RecordStep(SlotRollout& r, int t) {
     }
   }
   // Only episodes that follow clips tell the server's clip sampler something.
-  return TaskFollowsClips(config_.task) ? RecordEpisodeEnds(r.slot, result, done_data, truncated_data)
+  return TaskFollowsClips(config_.task) ? RecordEpisodeEnds(r.slot, result, done_data, truncated_data, ended_lengths)
                                         : absl::OkStatus();
 }
 
 absl::Status Trainer::RecordEpisodeEnds(SessionSlot* slot, const v1::StepResult& result, const float* done,
-                                        const float* truncated) {
+                                        const float* truncated, const std::vector<int>& ended_lengths) {
   const int n = slot->num_envs();
   std::vector<int32_t> clip, frame;
   std::vector<float> part_error;
@@ -189,6 +191,7 @@ absl::Status Trainer::RecordEpisodeEnds(SessionSlot* slot, const v1::StepResult&
     failure.set_clip(name);
     failure.set_frame(frame[i]);
     failure.set_terminated(truncated[i] <= 0.5f);
+    failure.set_steps(ended_lengths[i]);
     bool finite = true;
     for (int p = 0; p < parts; ++p) finite &= std::isfinite(part_error[i * parts + p]);
     if (failure.terminated() && finite) {

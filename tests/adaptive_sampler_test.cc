@@ -1,5 +1,5 @@
-// The adaptive clip sampler on its own: both schemes move toward failing clips and back after
-// successes, the floor holds exactly, uniform never moves.
+// The adaptive clip sampler on its own: every scheme moves toward failing clips and back after
+// successes, failure_rate weighs failures per step, the floor holds exactly, uniform never moves.
 #include "server/core/curriculum/adaptive_sampler.h"
 
 #include <algorithm>
@@ -22,8 +22,9 @@ TEST(AdaptiveSamplerTest, ParsesSchemeNames) {
   EXPECT_EQ(*ParseSamplingScheme("uniform"), SamplingScheme::kUniform);
   EXPECT_EQ(*ParseSamplingScheme("failure_count"), SamplingScheme::kFailureCount);
   EXPECT_EQ(*ParseSamplingScheme("decay_on_success"), SamplingScheme::kDecayOnSuccess);
-  for (SamplingScheme scheme :
-       {SamplingScheme::kUniform, SamplingScheme::kFailureCount, SamplingScheme::kDecayOnSuccess}) {
+  EXPECT_EQ(*ParseSamplingScheme("failure_rate"), SamplingScheme::kFailureRate);
+  for (SamplingScheme scheme : {SamplingScheme::kUniform, SamplingScheme::kFailureCount,
+                                SamplingScheme::kDecayOnSuccess, SamplingScheme::kFailureRate}) {
     EXPECT_EQ(*ParseSamplingScheme(SamplingSchemeName(scheme)), scheme);
   }
   auto bad = ParseSamplingScheme("phc");
@@ -46,8 +47,8 @@ TEST(AdaptiveSamplerTest, ValidatesParametersNamingTheField) {
 }
 
 TEST(AdaptiveSamplerTest, StartsUniform) {
-  for (SamplingScheme scheme :
-       {SamplingScheme::kUniform, SamplingScheme::kFailureCount, SamplingScheme::kDecayOnSuccess}) {
+  for (SamplingScheme scheme : {SamplingScheme::kUniform, SamplingScheme::kFailureCount,
+                                SamplingScheme::kDecayOnSuccess, SamplingScheme::kFailureRate}) {
     AdaptiveSampler sampler(8, scheme);
     for (double p : sampler.Weights()) EXPECT_NEAR(p, 1.0 / 8, 1e-12);
   }
@@ -172,7 +173,8 @@ TEST(AdaptiveSamplerTest, FloorIsExactAfterRenormalization) {
 
 TEST(AdaptiveSamplerTest, RandomReportsKeepTheFloorTheSumAndTheOrder) {
   std::mt19937_64 rng(7);
-  for (SamplingScheme scheme : {SamplingScheme::kFailureCount, SamplingScheme::kDecayOnSuccess}) {
+  for (SamplingScheme scheme :
+       {SamplingScheme::kFailureCount, SamplingScheme::kDecayOnSuccess, SamplingScheme::kFailureRate}) {
     const int n = 50;
     AdaptiveSampler sampler(n, scheme, 0.3, 0.99);
     std::uniform_int_distribution<int> clip(0, n - 1);
@@ -191,6 +193,60 @@ TEST(AdaptiveSamplerTest, RandomReportsKeepTheFloorTheSumAndTheOrder) {
       }
     }
   }
+}
+
+// Every episode of a long clip and of a short one fails, the long one after 150 steps, the
+// short one after 20; a third clip is tracked to its end every 30 steps. failure_count cannot
+// tell the first two apart; failure_rate draws the short one about 150 / 20 times as often.
+TEST(AdaptiveSamplerTest, FailureRateWeighsFailuresPerStep) {
+  AdaptiveSampler count(3, SamplingScheme::kFailureCount, 0.0);
+  AdaptiveSampler rate(3, SamplingScheme::kFailureRate, 0.0);
+  for (int k = 0; k < 400; ++k) {
+    for (AdaptiveSampler* sampler : {&count, &rate}) {
+      sampler->Observe(0, /*failed=*/true, /*steps=*/150);
+      sampler->Observe(1, true, 20);
+      sampler->Observe(2, false, 30);
+    }
+  }
+  const std::vector<double> p_count = count.Weights();
+  EXPECT_NEAR(p_count[0], p_count[1], 1e-9);
+  const std::vector<double>& w = rate.raw_weights();
+  // The moving sums converge to 100 reports' worth: (100 + 1) / (100 * L + 30).
+  EXPECT_NEAR(w[0], 101.0 / (100 * 150 + 30), 1e-4);
+  EXPECT_NEAR(w[1], 101.0 / (100 * 20 + 30), 1e-3);
+  EXPECT_NEAR(w[2], 1.0 / (100 * 30 + 30), 1e-4);
+  const std::vector<double> p_rate = rate.Weights();
+  EXPECT_NEAR(p_rate[1] / p_rate[0], 7.4, 0.1);
+  EXPECT_GT(p_rate[0], 10 * p_rate[2]);
+  EXPECT_NEAR(Sum(p_rate), 1.0, 1e-12);
+}
+
+// A report without its length counts the clip's recent mean length, or the prior's 30 steps.
+TEST(AdaptiveSamplerTest, FailureRateTakesUnknownLengthsAsTheClipsMean) {
+  AdaptiveSampler known(2, SamplingScheme::kFailureRate);
+  AdaptiveSampler unknown(2, SamplingScheme::kFailureRate);
+  for (int k = 0; k < 10; ++k) {
+    known.Observe(0, true, 40);
+    unknown.Observe(0, true, 40);
+  }
+  known.Observe(0, true, 40);
+  unknown.Observe(0, true, 0);
+  EXPECT_NEAR(known.raw_weights()[0], unknown.raw_weights()[0], 1e-12);
+  unknown.Observe(1, true, -5);  // nothing known about clip 1 yet: the prior's length
+  EXPECT_NEAR(unknown.raw_weights()[1], 2.0 / 60.0, 1e-12);
+}
+
+TEST(AdaptiveSamplerTest, FailureRateRemapKeepsSumsAndStartsNewClipsAtThePrior) {
+  AdaptiveSampler sampler(2, SamplingScheme::kFailureRate);
+  for (int k = 0; k < 50; ++k) sampler.Observe(1, true, 10);
+  const double failing = sampler.raw_weights()[1];
+  sampler.Remap({1, -1, 0}, /*new_clip_count=*/5.0);
+  ASSERT_EQ(sampler.num_clips(), 3);
+  EXPECT_DOUBLE_EQ(sampler.raw_weights()[0], failing);
+  EXPECT_DOUBLE_EQ(sampler.raw_weights()[1], kFailureRatePriorFailures / kFailureRatePriorSteps);
+  EXPECT_DOUBLE_EQ(sampler.raw_weights()[2], kFailureRatePriorFailures / kFailureRatePriorSteps);
+  sampler.Observe(0, true, 10);  // the carried sums go on: one more report as before the remap
+  EXPECT_GT(sampler.raw_weights()[0], failing);
 }
 
 TEST(AdaptiveSamplerTest, UniformNeverMoves) {

@@ -7,9 +7,11 @@
 #include <initializer_list>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <gmock/gmock.h>
 
+#include "common/atomic_file.h"
 #include "learner/part_retraining.h"
 #include "learner/policy_import.h"
 #include "learner/trainer.h"
@@ -84,6 +86,11 @@ std::optional<ArmsRetrained> TrainOnlyTheArms(const RunningServer& server, const
 TEST(PartRetrainingTest, OnlyTheNamedPartsTrain) {
   auto server = StartTestServer();
   TrainerConfig config = RetrainArms(*server, "arms");
+  // Shapes unlike the tracker's (small: attention {64} -> 32, controllers {256, 128}): the
+  // tracker's networks are built, and config.json and the checkpoint say so.
+  config.model.attention_hidden = {16};
+  config.model.embed_dim = 8;
+  config.model.controller_hidden = {48, 24};
   std::optional<ArmsRetrained> run = TrainOnlyTheArms(*server, config);
   ASSERT_TRUE(run.has_value());
   const ExportedPolicy& before = run->before;
@@ -97,6 +104,13 @@ TEST(PartRetrainingTest, OnlyTheNamedPartsTrain) {
   config.iterations = 1;
   auto resumed = Trainer::Create(config);
   ASSERT_TRUE(resumed.ok()) << resumed.status();
+  const ModelConfig& built = (*resumed)->config().model;
+  EXPECT_EQ(built.embed_dim, 32);
+  EXPECT_EQ(built.attention_hidden, std::vector<int64_t>({64}));
+  EXPECT_EQ(built.controller_hidden, std::vector<int64_t>({256, 128}));
+  auto recorded = ReadFileToString(config.run_dir + "/config.json", 1 << 20);
+  ASSERT_TRUE(recorded.ok());
+  EXPECT_THAT(*recorded, HasSubstr("\"embed_dim\": 32"));
   ASSERT_TRUE((*resumed)->Run().ok());
   auto again = ReadExportedPolicy(config.run_dir + "/policy.pt");
   ASSERT_TRUE(again.ok());

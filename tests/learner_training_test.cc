@@ -71,7 +71,22 @@ TEST(LearnerTrainingTest, TrainsCheckpointsAndExportsAPolicyTheServerRuns) {
   config.report_every = 1;
   auto trainer = Trainer::Create(config);
   ASSERT_TRUE(trainer.ok()) << trainer.status();
-  ASSERT_TRUE((*trainer)->Run().ok());
+  // The sessions' sampler states, read while they are open (GetStats lists live sessions only).
+  auto watcher = ConnectTo(*server);
+  int64_t reported_steps = 0, reports_while_open = 0;
+  ASSERT_TRUE((*trainer)
+                  ->Run([&](const IterationStats&) {
+                    auto open = watcher->GetStats();
+                    if (!open.ok()) return;
+                    reported_steps = reports_while_open = 0;
+                    for (const v1::SessionStats& session : open->sessions()) {
+                      for (const v1::ClipSamplingState& clip : session.clips()) {
+                        reported_steps += clip.reported_steps();
+                        reports_while_open += clip.failures() + clip.successes();
+                      }
+                    }
+                  })
+                  .ok());
   EXPECT_EQ((*trainer)->iteration(), 2);
   EXPECT_EQ((*trainer)->env_steps(), 2 * 16 * 8);
   const IterationStats& last = (*trainer)->history().back();
@@ -94,6 +109,10 @@ TEST(LearnerTrainingTest, TrainsCheckpointsAndExportsAPolicyTheServerRuns) {
   ASSERT_TRUE(stats.ok());
   EXPECT_GT(stats->failure_reports(), 0);
   EXPECT_EQ(stats->failure_reports(), stats->episodes());
+  // Each report carried its episode's length: at least one step each, no more than were stepped.
+  EXPECT_GE(reported_steps, reports_while_open);
+  EXPECT_GT(reports_while_open, 0);
+  EXPECT_LE(reported_steps, (*trainer)->env_steps());
 
   // The exported policy runs in the server, and evaluation reports the paper's metrics.
   auto report = Evaluate(*client, dir + "/policy.pt", *ReadFileToString(dir + "/policy.pt", 1 << 30),

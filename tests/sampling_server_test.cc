@@ -35,10 +35,12 @@ TEST_F(SimulationServerTest, ReportFailuresValidatesAndStores) {
   failure->set_clip("deepmimic_run");
   failure->set_frame(7);
   failure->set_terminated(true);
+  failure->set_steps(12);
   for (float e : {0.1f, 0.2f, 0.3f, 0.05f, 0.05f}) failure->add_part_errors(e);
   v1::ClipFailure* success = request.add_failures();
   success->set_clip("deepmimic_walk");
   success->set_frame(-1);
+  success->set_steps(30);
   auto state = client_->ReportFailures(request);
   ASSERT_TRUE(state.ok()) << state.status();
   ASSERT_EQ(state->clips_size(), 2);
@@ -46,7 +48,9 @@ TEST_F(SimulationServerTest, ReportFailuresValidatesAndStores) {
   EXPECT_EQ(state->clips(1).failures(), 1);
   EXPECT_EQ(state->clips(1).last_failed_frame(), 7);
   EXPECT_NEAR(state->clips(1).mean_part_errors(2), 0.3f, 1e-6);
+  EXPECT_EQ(state->clips(1).reported_steps(), 12);
   EXPECT_EQ(state->clips(0).successes(), 1);
+  EXPECT_EQ(state->clips(0).reported_steps(), 30);
   EXPECT_NEAR(state->clips(0).probability() + state->clips(1).probability(), 1.0, 1e-9);
   EXPECT_EQ(state->reports(), 2);
 
@@ -71,6 +75,9 @@ TEST_F(SimulationServerTest, ReportFailuresValidatesAndStores) {
   bad = request;
   bad.mutable_failures(0)->set_frame(100000);
   expect(bad, absl::StatusCode::kInvalidArgument, "failures[0].frame");
+  bad = request;
+  bad.mutable_failures(1)->set_steps(-3);
+  expect(bad, absl::StatusCode::kInvalidArgument, "failures[1].steps");
   // Rejected reports recorded nothing.
   auto unchanged = client_->ReportFailures(request);
   ASSERT_TRUE(unchanged.ok());
@@ -195,8 +202,9 @@ TEST_F(SimulationServerTest, SuccessesBringTheProbabilityBack) {
   EXPECT_TRUE((*stream)->Close().ok());
 }
 
-TEST(SimulationServerSamplingTest, UniformAblationNeverMovesAndDecaySchemeFollowsFailures) {
-  for (SamplingScheme scheme : {SamplingScheme::kUniform, SamplingScheme::kDecayOnSuccess}) {
+TEST(SimulationServerSamplingTest, UniformAblationNeverMovesAndTheOtherSchemesFollowFailures) {
+  for (SamplingScheme scheme :
+       {SamplingScheme::kUniform, SamplingScheme::kDecayOnSuccess, SamplingScheme::kFailureRate}) {
     ServerOptions options;
     options.service.sampling = scheme;
     auto server = StartTestServer(options);
@@ -218,6 +226,7 @@ TEST(SimulationServerSamplingTest, UniformAblationNeverMovesAndDecaySchemeFollow
     failure->set_clip("deepmimic_run");
     failure->set_frame(3);
     failure->set_terminated(true);
+    failure->set_steps(5);
     auto state = client->ReportFailures(request);
     ASSERT_TRUE(state.ok()) << state.status();
     std::vector<float> zeros(2 * 69, 0.f);
@@ -238,6 +247,10 @@ TEST(SimulationServerSamplingTest, UniformAblationNeverMovesAndDecaySchemeFollow
       EXPECT_DOUBLE_EQ(state->clips(1).weight(), 1.0);
       EXPECT_NEAR(state->clips(0).weight(), std::pow(0.999, 10), 1e-12);
       EXPECT_GT(state->clips(1).probability(), state->clips(0).probability());
+    }
+    if (scheme == SamplingScheme::kFailureRate) {  // one failure in 5 steps, on the prior's 1 in 30
+      EXPECT_NEAR(state->clips(1).weight(), 2.0 / 35.0, 1e-12);
+      EXPECT_GT(state->clips(1).probability(), 2 * state->clips(0).probability());
     }
     EXPECT_EQ(state->clips(1).failures(), 1);
     EXPECT_TRUE((*stream)->Close().ok());

@@ -55,6 +55,7 @@ void FillClipSamplingStates(const SimulationSession& session, const std::vector<
     clip->set_failures(record.failures);
     clip->set_successes(record.successes);
     clip->set_last_failed_frame(record.last_failed_frame);
+    clip->set_reported_steps(record.steps);
     for (double e : record.mean_part_errors) clip->add_mean_part_errors(static_cast<float>(e));
   }
 }
@@ -157,7 +158,7 @@ grpc::Status SimulationService::ReportFailures(grpc::ServerContext* context, con
   for (const v1::ClipFailure& failure : request->failures()) {
     reports.push_back(NamedClipReport{failure.clip(), failure.frame(),
                                       {failure.part_errors().begin(), failure.part_errors().end()},
-                                      failure.terminated()});
+                                      failure.terminated(), failure.steps()});
   }
   if (!request->discriminator().empty()) {
     auto scorer = DiscriminatorScorer::LoadBytes(request->discriminator(), session->batch->spec().amp_obs_size);

@@ -48,6 +48,7 @@ absl::StatusOr<std::vector<GenerationRequest>> SimulationSession::RecordReports(
     record.frame = reports[r].frame;
     record.part_errors = reports[r].part_errors;
     record.terminated = reports[r].terminated;
+    record.steps = reports[r].steps;
     records.push_back(std::move(record));
   }
   const MotionLibrary& library = *motion_set.library();
@@ -56,7 +57,7 @@ absl::StatusOr<std::vector<GenerationRequest>> SimulationSession::RecordReports(
   if (absl::Status status = ledger.Record(records, frames); !status.ok()) return status;
   std::vector<SessionMotionSet::FailureReport> failures;
   for (const FailureLedger::Report& record : records) {
-    adaptive_sampler.Observe(record.clip, /*failed=*/record.terminated);
+    adaptive_sampler.Observe(record.clip, /*failed=*/record.terminated, record.steps);
     if (record.terminated) failures.push_back({record.clip, record.part_errors});
   }
   generation.stale_reports += stale;

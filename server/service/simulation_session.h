@@ -54,6 +54,7 @@ struct NamedClipReport {
   int frame = -1;
   std::vector<float> part_errors;
   bool terminated = true;
+  int steps = 0;  // control steps the episode ran; 0: unknown
 };
 
 class SimulationSession {

@@ -39,7 +39,8 @@ ABSL_FLAG(std::string, pd_mode, "position_implicit",
           "position_implicit or stable_pd (motor-skill family sessions always run stable_pd)");
 ABSL_FLAG(std::string, sampling, "failure_count",
           "how sessions pick clips from ReportFailures: failure_count (PHC: probability ~ recent failures), "
-          "decay_on_success (ProtoMotions: weight x0.999 per success, 1 per failure) or uniform");
+          "decay_on_success (ProtoMotions: weight x0.999 per success, 1 per failure), failure_rate "
+          "(failures per simulated step, fair to long clips) or uniform");
 ABSL_FLAG(bool, no_adaptive, false, "ablation: uniform clip sampling whatever --sampling says");
 ABSL_FLAG(double, sampling_floor, modskill::kDefaultSamplingFloor,
           "share of the probability spread uniformly: every clip keeps >= sampling_floor / clips (0 .. 1)");

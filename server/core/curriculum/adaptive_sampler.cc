@@ -7,13 +7,31 @@
 #include "absl/strings/str_cat.h"
 
 namespace modskill {
+namespace {
+
+// The raw weight of a clip with no reports.
+double FreshWeight(SamplingScheme scheme) {
+  switch (scheme) {
+    case SamplingScheme::kFailureCount:
+      return kFailureCountEpsilon;
+    case SamplingScheme::kFailureRate:
+      return kFailureRatePriorFailures / kFailureRatePriorSteps;
+    case SamplingScheme::kUniform:
+    case SamplingScheme::kDecayOnSuccess:
+      return 1.0;
+  }
+  return 1.0;
+}
+
+}  // namespace
 
 absl::StatusOr<SamplingScheme> ParseSamplingScheme(absl::string_view name) {
   if (name == "uniform") return SamplingScheme::kUniform;
   if (name == "failure_count") return SamplingScheme::kFailureCount;
   if (name == "decay_on_success") return SamplingScheme::kDecayOnSuccess;
+  if (name == "failure_rate") return SamplingScheme::kFailureRate;
   return absl::InvalidArgumentError(
-      absl::StrCat("sampling: '", name, "' is not one of uniform, failure_count, decay_on_success"));
+      absl::StrCat("sampling: '", name, "' is not one of uniform, failure_count, decay_on_success, failure_rate"));
 }
 
 const char* SamplingSchemeName(SamplingScheme scheme) {
@@ -24,6 +42,8 @@ const char* SamplingSchemeName(SamplingScheme scheme) {
       return "failure_count";
     case SamplingScheme::kDecayOnSuccess:
       return "decay_on_success";
+    case SamplingScheme::kFailureRate:
+      return "failure_rate";
   }
   return "unknown";
 }
@@ -44,9 +64,11 @@ AdaptiveSampler::AdaptiveSampler(int num_clips, SamplingScheme scheme, double fl
       floor_fraction_(std::isfinite(floor_fraction) ? std::clamp(floor_fraction, 0.0, 1.0) : 1.0),
       decay_(std::isfinite(decay) && decay > 0 && decay <= 1 ? decay : 1.0),
       counts_(std::max(num_clips, 0), 0.0),
-      weights_(std::max(num_clips, 0), scheme == SamplingScheme::kFailureCount ? kFailureCountEpsilon : 1.0) {}
+      steps_(std::max(num_clips, 0), 0.0),
+      reports_(std::max(num_clips, 0), 0.0),
+      weights_(std::max(num_clips, 0), FreshWeight(scheme)) {}
 
-void AdaptiveSampler::Observe(int clip, bool failed) {
+void AdaptiveSampler::Observe(int clip, bool failed, int steps) {
   if (clip < 0 || clip >= num_clips()) return;
   switch (scheme_) {
     case SamplingScheme::kUniform:
@@ -58,23 +80,38 @@ void AdaptiveSampler::Observe(int clip, bool failed) {
     case SamplingScheme::kDecayOnSuccess:
       weights_[clip] = failed ? 1.0 : weights_[clip] * decay_;
       return;
+    case SamplingScheme::kFailureRate: {
+      const double length = steps > 0                ? static_cast<double>(steps)
+                            : reports_[clip] > 0     ? steps_[clip] / reports_[clip]
+                                                     : kFailureRatePriorSteps;
+      counts_[clip] = kFailureRateMemory * counts_[clip] + (failed ? 1.0 : 0.0);
+      steps_[clip] = kFailureRateMemory * steps_[clip] + length;
+      reports_[clip] = kFailureRateMemory * reports_[clip] + 1.0;
+      weights_[clip] = (counts_[clip] + kFailureRatePriorFailures) / (steps_[clip] + kFailureRatePriorSteps);
+      return;
+    }
   }
 }
 
 void AdaptiveSampler::Remap(const std::vector<int>& previous, double new_clip_count) {
   const double fresh_count = std::isfinite(new_clip_count) ? std::max(new_clip_count, 0.0) : 0.0;
-  std::vector<double> counts(previous.size()), weights(previous.size());
-  for (size_t c = 0; c < previous.size(); ++c) {
+  const size_t n = previous.size();
+  std::vector<double> counts(n, 0.0), steps(n, 0.0), reports(n, 0.0), weights(n, FreshWeight(scheme_));
+  for (size_t c = 0; c < n; ++c) {
     const int old = previous[c];
     if (old >= 0 && old < num_clips()) {
       counts[c] = counts_[old];
+      steps[c] = steps_[old];
+      reports[c] = reports_[old];
       weights[c] = weights_[old];
-      continue;
+    } else if (scheme_ == SamplingScheme::kFailureCount) {
+      counts[c] = fresh_count;
+      weights[c] = fresh_count + kFailureCountEpsilon;
     }
-    counts[c] = scheme_ == SamplingScheme::kFailureCount ? fresh_count : 0.0;
-    weights[c] = scheme_ == SamplingScheme::kFailureCount ? fresh_count + kFailureCountEpsilon : 1.0;
   }
   counts_ = std::move(counts);
+  steps_ = std::move(steps);
+  reports_ = std::move(reports);
   weights_ = std::move(weights);
 }
 

@@ -1,10 +1,16 @@
 // Active skill learning's clip sampler (docs/DESIGN.md section 3): clips the learner fails on are
-// drawn more often. Two schemes from the literature, plus the uniform ablation:
+// drawn more often. Two schemes from the literature, a length-fair one, and the uniform ablation:
 //   kFailureCount (PHC): probability ∝ a clip's recent failures. "Recent" is an exponential
 //     moving count, so that a clip that is learned drifts back: count += 1 per failure,
 //     count *= kFailureCountSuccessDecay (0.9) per success; weight = count + kFailureCountEpsilon.
 //   kDecayOnSuccess (ProtoMotions): weight *= decay (0.999) per success, weight = 1 per failure
 //     (every weight starts at 1).
+//   kFailureRate: probability ∝ failures per simulated control step (a hazard rate). Episodes
+//     start at random frames and succeed only at a clip's end, so under kFailureCount a long
+//     clip fails most of its episodes however well it is tracked (a 23-s clip took 20-31 % of
+//     the draws among 20 in our runs); per step, a clip is as hard as how soon it is lost.
+//     Moving sums F (failures) and S (steps, ClipFailure.steps) decay by kFailureRateMemory per
+//     report on the clip; weight = (F + kFailureRatePriorFailures) / (S + kFailureRatePriorSteps).
 //   kUniform: never moves (the --no_adaptive ablation).
 // Probabilities are proportional to the weights, so a clip's successes lower its probability
 // relative to the other clips' weights: a clip that is the only one failing keeps all the mass
@@ -27,9 +33,11 @@ enum class SamplingScheme {
   kUniform,
   kFailureCount,    // PHC
   kDecayOnSuccess,  // ProtoMotions
+  kFailureRate,     // failures per step
 };
 
-// "uniform", "failure_count", "decay_on_success"; anything else is INVALID_ARGUMENT naming the value.
+// "uniform", "failure_count", "decay_on_success", "failure_rate"; anything else is
+// INVALID_ARGUMENT naming the value.
 absl::StatusOr<SamplingScheme> ParseSamplingScheme(absl::string_view name);
 const char* SamplingSchemeName(SamplingScheme scheme);
 
@@ -41,6 +49,12 @@ inline constexpr double kDefaultSamplingDecay = 0.999;
 // never failed (relative to one fresh failure).
 inline constexpr double kFailureCountSuccessDecay = 0.9;
 inline constexpr double kFailureCountEpsilon = 1e-3;
+// kFailureRate: the per-report decay of the moving sums (a memory of ~100 reports per clip), and
+// the prior a clip starts from: one failure in 30 steps (a second), about what an untrained
+// policy does, so that a clip not yet reported is neither ignored nor favoured.
+inline constexpr double kFailureRateMemory = 0.99;
+inline constexpr double kFailureRatePriorFailures = 1.0;
+inline constexpr double kFailureRatePriorSteps = 30.0;
 
 // Checks floor_fraction in [0, 1] and decay in (0, 1]; the message names `floor_field` or
 // `decay_field`.
@@ -57,14 +71,16 @@ class AdaptiveSampler {
   AdaptiveSampler(int num_clips, SamplingScheme scheme, double floor_fraction = kDefaultSamplingFloor,
                   double decay = kDefaultSamplingDecay);
 
-  // One report: the clip's episode failed (terminated) or was tracked to its end. `clip` must be
-  // in [0, num_clips) (the caller has validated it); others are ignored.
-  void Observe(int clip, bool failed);
+  // One report: the clip's episode failed (terminated) or was tracked to its end after `steps`
+  // control steps. `clip` must be in [0, num_clips) (the caller has validated it); others are
+  // ignored. steps <= 0 is unknown: kFailureRate counts the clip's recent mean episode length.
+  void Observe(int clip, bool failed, int steps = 0);
 
   // The clip list changed (generative resampling): new clip c was old clip previous[c] and keeps
   // its count and weight, or is new (-1) and starts as a never-failed clip would, except that
-  // `new_clip_count` failures are credited to it (kFailureCount; kDecayOnSuccess: weight 1), so
-  // that a variant of a failing clip is drawn about as often as its parent from the start.
+  // `new_clip_count` failures are credited to it (kFailureCount; kDecayOnSuccess: weight 1;
+  // kFailureRate: the prior), so that a variant of a failing clip is drawn about as often as
+  // its parent from the start.
   void Remap(const std::vector<int>& previous, double new_clip_count = 0.0);
 
   // Normalized probabilities with the floor applied (sum 1). With q_c = w_c / Σ w the scheme's
@@ -78,7 +94,8 @@ class AdaptiveSampler {
   // its weight can never recover); the floor keeps every clip in the training distribution.
   std::vector<double> Weights() const;
 
-  // The scheme's raw weights w_c (failure count + ε, or the decayed weight; 1 for uniform).
+  // The scheme's raw weights w_c (failure count + ε, the decayed weight, or failures per step;
+  // 1 for uniform).
   const std::vector<double>& raw_weights() const { return weights_; }
   SamplingScheme scheme() const { return scheme_; }
   double floor_fraction() const { return floor_fraction_; }
@@ -88,7 +105,9 @@ class AdaptiveSampler {
   SamplingScheme scheme_;
   double floor_fraction_;
   double decay_;
-  std::vector<double> counts_;   // kFailureCount: moving failure counts
+  std::vector<double> counts_;   // kFailureCount, kFailureRate: moving failure counts
+  std::vector<double> steps_;    // kFailureRate: moving step sums
+  std::vector<double> reports_;  // kFailureRate: moving report counts (for unknown lengths)
   std::vector<double> weights_;  // raw weights
 };
 

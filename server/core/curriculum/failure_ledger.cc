@@ -21,6 +21,9 @@ absl::Status FailureLedger::Record(absl::Span<const Report> reports, absl::Span<
       return absl::InvalidArgumentError(absl::StrCat(where, ".frame: ", report.frame, " outside [-1, ",
                                                      clip_frames[report.clip], ")"));
     }
+    if (report.steps < 0) {
+      return absl::InvalidArgumentError(absl::StrCat(where, ".steps: ", report.steps, " is negative"));
+    }
     if (!report.part_errors.empty() && static_cast<int>(report.part_errors.size()) != num_parts_) {
       return absl::InvalidArgumentError(absl::StrCat(where, ".part_errors: ", report.part_errors.size(),
                                                      " values, the session's layout has ", num_parts_, " parts"));
@@ -34,6 +37,7 @@ absl::Status FailureLedger::Record(absl::Span<const Report> reports, absl::Span<
   }
   for (const Report& report : reports) {
     ClipFailureRecord& clip = clips_[report.clip];
+    clip.steps += report.steps;
     if (!report.terminated) {
       ++clip.successes;
       continue;

@@ -15,6 +15,7 @@ struct ClipFailureRecord {
   int64_t failures = 0;
   int64_t successes = 0;
   int last_failed_frame = -1;
+  int64_t steps = 0;  // sum of the reports' episode lengths (control steps; unknown ones add 0)
   std::vector<double> mean_part_errors;  // running mean over failures that carried part errors
   int64_t part_error_reports = 0;
 };
@@ -28,9 +29,11 @@ class FailureLedger {
     int frame = -1;
     std::vector<float> part_errors;  // empty or one per part, meters
     bool terminated = true;
+    int steps = 0;  // control steps the episode ran; 0: unknown
   };
-  // Validates every report (clip index, frame, part count, finite non-negative errors below
-  // 100 m) before recording any; the message names the report index and field.
+  // Validates every report (clip index, frame, non-negative steps, part count, finite
+  // non-negative errors below 100 m) before recording any; the message names the report index
+  // and field.
   absl::Status Record(absl::Span<const Report> reports, absl::Span<const int> clip_frames);
 
   // The clip list changed (generative resampling): new clip c was old clip previous[c], or is
