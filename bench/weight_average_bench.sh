@@ -44,7 +44,8 @@ PY
 ((${#EXPORTS[@]} >= 2)) || { echo "error: fewer than two policy_at_*M.pt exports in $RUN between $FROM and $TO" >&2; exit 2; }
 OUT="$RUN/weight_average"
 mkdir -p "$OUT"
-port=$(/usr/bin/python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
+source bench/side_by_side.sh  # free_port
+port=$(free_port)
 # shellcheck disable=SC2086  # the flags are words on purpose
 "$BUILD/server/modskill-server" --port "$port" --threads 1 $SERVER_FLAGS > "$OUT/server.log" 2>&1 &
 SERVER=$!
