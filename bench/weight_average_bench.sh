@@ -48,8 +48,7 @@ source bench/side_by_side.sh  # free_port
 port=$(free_port)
 # shellcheck disable=SC2086  # the flags are words on purpose
 "$BUILD/server/modskill-server" --port "$port" --threads 1 $SERVER_FLAGS > "$OUT/server.log" 2>&1 &
-SERVER=$!
-trap 'kill $SERVER 2>/dev/null || true' EXIT
+SERVERS+=($!)  # stopped on exit (side_by_side.sh)
 CLIPS=()
 [ -n "$MOTIONS" ] && CLIPS=(--clips "$MOTIONS")
 evaluate() {  # evaluate NAME POLICY
