@@ -93,6 +93,12 @@ absl::StatusOr<TrainerConfig> TrainerConfig::ForPreset(const std::string& preset
   if (!model.ok()) return model.status();
   TrainerConfig config;
   config.model = *model;
+  if (preset == "small") {
+    // Less style reward tracks closer: on the walk, the median of 30 exports per run 26.0 against
+    // 30.5 mm at 1.64 M steps (README, Performance, "Learning").
+    config.amp_reward_weight = 0.2;
+    config.task_reward_weight = 0.8;
+  }
   if (preset == "paper") {
     // docs/DESIGN.md section 3 (PHC): lr 2e-5, horizon 32, minibatch 16384, 6 epochs, 3072 envs.
     config.learning_rate = 2e-5;

@@ -492,6 +492,16 @@ TEST(LearnerTrainingTest, BadConfigurationsAreClearErrors) {
 // A few iterations on one clip: the mean episode return rises (measured with this seed:
 // about 1.20 over the first three iterations, 1.47 over the last three; every env starts out
 // falling within a few steps, and learning first buys it steps).
+// The presets' reward weights: `small` tracks with less style reward (README, Performance,
+// "Learning": the walk's 30-export medians), `paper` keeps PHC's 0.5 / 0.5.
+TEST(LearnerTrainingTest, PresetsWeighStyleAndTaskRewards) {
+  const TrainerConfig small = *TrainerConfig::ForPreset("small"), paper = *TrainerConfig::ForPreset("paper");
+  EXPECT_DOUBLE_EQ(small.amp_reward_weight, 0.2);
+  EXPECT_DOUBLE_EQ(small.task_reward_weight, 0.8);
+  EXPECT_DOUBLE_EQ(paper.amp_reward_weight, 0.5);
+  EXPECT_DOUBLE_EQ(paper.task_reward_weight, 0.5);
+}
+
 TEST(LearnerTrainingTest, ReturnRisesOnASingleClip) {
   // One fixed clip: generated variants joining mid-run would change what the return measures.
   ServerOptions options;

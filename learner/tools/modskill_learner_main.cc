@@ -121,7 +121,9 @@ ABSL_FLAG(int64_t, learning_rate_decay_steps, 0,
           "decay --learning_rate linearly to --learning_rate_floor x it over this many env steps (0: constant)");
 ABSL_FLAG(double, learning_rate_floor, 0.1, "the decayed learning rate's final fraction of --learning_rate, in (0, 1]");
 ABSL_FLAG(double, log_std, 0, "fixed log standard deviation of the Gaussian policy (0: the preset's)");
-ABSL_FLAG(double, amp_reward_weight, 0.5, "weight of the AMP style reward (task: 1 - this)");
+ABSL_FLAG(double, amp_reward_weight, -1,
+          "weight of the AMP style reward (task: 1 - this); -1: tracking runs the preset's (small 0.2, paper 0.5), "
+          "task runs 0.5");
 ABSL_FLAG(double, energy_weight, 1,
           "the sessions' energy penalty as a multiple of the paper's (SessionConfig.energy_weight; 1: the paper's; 0: off, so that "
           "no step of a goal task is negative and falling never pays)");
@@ -420,8 +422,13 @@ absl::StatusOr<TrainerConfig> ConfigFromFlags(const std::string& token) {
   config->learning_rate_decay_steps = absl::GetFlag(FLAGS_learning_rate_decay_steps);
   config->learning_rate_floor = absl::GetFlag(FLAGS_learning_rate_floor);
   if (absl::GetFlag(FLAGS_log_std) != 0) config->model.log_std = absl::GetFlag(FLAGS_log_std);
-  const double amp_weight = absl::GetFlag(FLAGS_amp_reward_weight);
-  if (!(amp_weight >= 0 && amp_weight <= 1)) return absl::InvalidArgumentError("--amp_reward_weight must be in [0, 1]");
+  double amp_weight = absl::GetFlag(FLAGS_amp_reward_weight);
+  // The skill-reuse heads were measured at PHC's 0.5 / 0.5 (README, "Skill reuse").
+  constexpr double kTaskAmpRewardWeight = 0.5;
+  if (amp_weight == -1) amp_weight = config->task == "tracking" ? config->amp_reward_weight : kTaskAmpRewardWeight;
+  if (!(amp_weight >= 0 && amp_weight <= 1)) {
+    return absl::InvalidArgumentError(absl::StrCat("--amp_reward_weight: ", amp_weight, " must be in [0, 1]"));
+  }
   config->amp_reward_weight = amp_weight;
   config->task_reward_weight = 1 - amp_weight;
   config->energy_weight = absl::GetFlag(FLAGS_energy_weight);
