@@ -46,7 +46,8 @@ Trainer::Trainer(const TrainerConfig& config)
       curriculum_(config.curriculum_start > 0 ? config.curriculum_start : config.termination_distance,
                   config.curriculum_end > 0 ? config.curriculum_end : config.termination_distance),
       generator_(at::detail::createCPUGenerator(config.seed)),
-      acting_generator_(at::detail::createCPUGenerator(rank_seed() * 1000003 + 7919)) {}
+      acting_generator_(at::detail::createCPUGenerator(rank_seed() * 1000003 + 7919)),
+      held_noise_(config_.noise_hold_steps) {}
 
 Trainer::~Trainer() { DiscardCollection(); }
 
@@ -124,6 +125,13 @@ ServerPoolOptions Trainer::PoolOptions() const {
   for (const std::string& part : config.reward_parts) pool.session.add_reward_parts(part);
   pool.session.set_reward_relative_to_root(config.reward_relative_to_root);
   if (config.energy_weight != 1.0) pool.session.set_energy_weight(static_cast<float>(config.energy_weight));
+  if (config.imitation_kernels.any()) {
+    v1::ImitationKernels* kernels = pool.session.mutable_imitation_kernels();
+    kernels->set_pos(static_cast<float>(config.imitation_kernels.pos));
+    kernels->set_rot(static_cast<float>(config.imitation_kernels.rot));
+    kernels->set_vel(static_cast<float>(config.imitation_kernels.vel));
+    kernels->set_ang_vel(static_cast<float>(config.imitation_kernels.ang_vel));
+  }
   if (!IsTrackingTask(config.task)) {
     pool.session.set_task(config.task);
     v1::TaskSettings* settings = pool.session.mutable_task_settings();

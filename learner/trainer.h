@@ -22,6 +22,7 @@
 #include "learner/amp_discriminator.h"
 #include "learner/critic.h"
 #include "learner/data_parallel.h"
+#include "learner/held_noise.h"
 #include "learner/modskill_policy.h"
 #include "learner/ppo_update.h"
 #include "learner/running_mean_std.h"
@@ -222,6 +223,7 @@ class Trainer {
   std::unordered_map<SessionSlot*, size_t> slot_index_;  // into episode_return_ / episode_length_
   torch::Generator generator_;         // minibatches and AMP draws (the update's thread)
   torch::Generator acting_generator_;  // action noise (the collection's thread)
+  HeldNoise held_noise_;               // that noise, held per env (--noise_hold_steps)
   // PpoSettings::sampled_dims: with --frozen_parts_act_on_mean, 1 over the retrained parts' actions
   // and 0 over the frozen parts'; undefined otherwise (every action is sampled).
   torch::Tensor sampled_dims_;

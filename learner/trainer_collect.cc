@@ -104,7 +104,8 @@ absl::Status Trainer::Act(SlotRollout& r, int t, const torch::Tensor& obs, Actin
   r.raw_obs.push_back(obs);
   const torch::Tensor mean = acting.policy->SampleMean(normalized);
   const torch::Tensor log_std = acting.policy->log_std();
-  torch::Tensor noise = log_std.exp() * torch::randn(mean.sizes(), acting_generator_);
+  torch::Tensor noise =
+      log_std.exp() * held_noise_.Next(slot_index_[r.slot], mean.size(0), mean.size(1), acting_generator_);
   if (sampled_dims_.defined()) noise *= sampled_dims_;
   const torch::Tensor sample = mean + noise;
   r.obs[t].copy_(normalized);
@@ -128,6 +129,7 @@ absl::Status Trainer::RecordStep(SlotRollout& r, int t) {
   }
   r.task_reward[t].copy_(*reward);
   r.dones[t].copy_(*done);
+  held_noise_.EpisodesEnded(slot_index_[r.slot], *done);
   r.truncated[t].copy_(*truncated);
   r.amp_next[t].copy_(amp->narrow(1, 0, layout_.amp_obs_size));  // the newest frames: what the discriminator reads
   r.reward_terms_sum += terms->to(torch::kFloat64).sum(0);

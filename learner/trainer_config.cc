@@ -1,5 +1,6 @@
 #include "learner/trainer_config.h"
 
+#include <algorithm>
 #include <cmath>
 #include <tuple>
 #include <utility>
@@ -7,7 +8,9 @@
 #include <nlohmann/json.hpp>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/numbers.h"
 #include "absl/strings/str_join.h"
+#include "absl/strings/str_split.h"
 #include "learner/server_discovery.h"
 
 namespace modskill::learner {
@@ -88,6 +91,41 @@ absl::Status ValidateTask(const TrainerConfig& c) {
 
 }  // namespace
 
+absl::StatusOr<ImitationKernels> ParseImitationKernels(absl::string_view text) {
+  ImitationKernels kernels;
+  if (text.empty()) return kernels;
+  const auto bad = [&](absl::string_view part, absl::string_view why) {
+    return absl::InvalidArgumentError(absl::StrCat("--imitation_kernels: '", part.substr(0, 64), "' ", why));
+  };
+  std::vector<std::string> seen;
+  for (absl::string_view part : absl::StrSplit(text, ',')) {
+    const std::vector<absl::string_view> name_value = absl::StrSplit(part, absl::MaxSplits('=', 1));
+    double value = 0;
+    if (name_value.size() != 2 || !absl::SimpleAtod(name_value[1], &value)) return bad(part, "is not TERM=K");
+    double* target = name_value[0] == "pos"       ? &kernels.pos
+                     : name_value[0] == "rot"     ? &kernels.rot
+                     : name_value[0] == "vel"     ? &kernels.vel
+                     : name_value[0] == "ang_vel" ? &kernels.ang_vel
+                                                  : nullptr;
+    if (target == nullptr) return bad(part, "names no term (pos, rot, vel, ang_vel)");
+    if (std::find(seen.begin(), seen.end(), name_value[0]) != seen.end()) return bad(part, "repeats its term");
+    seen.emplace_back(name_value[0]);
+    if (!(std::isfinite(value) && value >= 0 && value <= 10000)) return bad(part, "must be in [0, 10000] (0: the default)");
+    *target = value;
+  }
+  return kernels;
+}
+
+std::string ImitationKernelsText(const ImitationKernels& kernels) {
+  std::vector<std::string> parts;
+  const std::pair<const char*, double> terms[] = {
+      {"pos", kernels.pos}, {"rot", kernels.rot}, {"vel", kernels.vel}, {"ang_vel", kernels.ang_vel}};
+  for (const auto& [name, value] : terms) {
+    if (value != 0) parts.push_back(absl::StrCat(name, "=", value));
+  }
+  return absl::StrJoin(parts, ",");
+}
+
 absl::StatusOr<TrainerConfig> TrainerConfig::ForPreset(const std::string& preset) {
   auto model = ModelConfig::Preset(preset);
   if (!model.ok()) return model.status();
@@ -142,6 +180,15 @@ absl::Status TrainerConfig::Validate() const {
   if (model.amp_frames < 0) return bad("amp_frames", model.amp_frames, "must be >= 0 (0: the server's whole AMP history)");
   if (task_reward_weight < 0 || amp_reward_weight < 0) return absl::InvalidArgumentError("reward weights must be >= 0");
   if (!(energy_weight >= 0 && energy_weight <= 100)) return bad("energy_weight", energy_weight, "must be in [0, 100]");
+  for (double k : {imitation_kernels.pos, imitation_kernels.rot, imitation_kernels.vel, imitation_kernels.ang_vel}) {
+    if (!(k >= 0 && k <= 10000)) return bad("imitation_kernels", k, "must be in [0, 10000] (0: the default)");
+  }
+  if (noise_hold_steps < 1 || noise_hold_steps > 10000) {
+    return bad("noise_hold_steps", noise_hold_steps, "must be in [1, 10000]");
+  }
+  if (imitation_kernels.any() && !TaskFollowsClips(task)) {
+    return absl::InvalidArgumentError(absl::StrCat("--imitation_kernels: task ", task, " has no imitation reward"));
+  }
   if (run_dir.empty()) return absl::InvalidArgumentError("--run_dir: required");
   if (report_every < 0) return bad("report_every", report_every, "must be >= 0");
   if (checkpoint_every < 1) return bad("checkpoint_every", checkpoint_every, "must be >= 1");
@@ -230,6 +277,8 @@ std::string TrainerConfig::ToJson() const {
   json["task_reward_weight"] = task_reward_weight;
   json["amp_reward_weight"] = amp_reward_weight;
   json["energy_weight"] = energy_weight;
+  json["imitation_kernels"] = ImitationKernelsText(imitation_kernels);
+  json["noise_hold_steps"] = noise_hold_steps;
   json["discriminator_learning_rate"] = discriminator_learning_rate;
   json["gradient_penalty_weight"] = gradient_penalty_weight;
   json["seed"] = seed;

@@ -17,6 +17,18 @@ enum class TerminationBodies;  // server/core/env/tracking_env.h
 
 namespace modskill::learner {
 
+// The sessions' SessionConfig.imitation_kernels (the imitation reward's k per term); 0 in a field:
+// the server's default (PHC's 100, 10, 0.1, 0.1).
+struct ImitationKernels {
+  double pos = 0, rot = 0, vel = 0, ang_vel = 0;
+  bool any() const { return pos != 0 || rot != 0 || vel != 0 || ang_vel != 0; }
+};
+
+// "--imitation_kernels pos=400,rot=20" (terms pos, rot, vel, ang_vel, each once, in [0, 10000]);
+// "": every term's default. INVALID_ARGUMENT naming the flag and the part that is wrong.
+absl::StatusOr<ImitationKernels> ParseImitationKernels(absl::string_view text);
+std::string ImitationKernelsText(const ImitationKernels& kernels);  // "pos=400,rot=20", "" for defaults
+
 struct TrainerConfig {
   // Where to simulate.
   std::vector<std::string> servers;
@@ -117,6 +129,10 @@ struct TrainerConfig {
   // 0.12, so every step lived is negative and PPO learns to fall (reach, 2026-12-04); 0 keeps each
   // step's reward >= 0. Evaluation's normalized return never counts energy.
   double energy_weight = 1.0;
+  ImitationKernels imitation_kernels;
+  // Each env keeps its exploration noise for this many control steps on average (geometric;
+  // held_noise.h), and draws afresh when its episode ends; 1: fresh noise every step.
+  int noise_hold_steps = 1;
   double discriminator_learning_rate = 1e-4;
   double gradient_penalty_weight = 5.0;
   int discriminator_epochs = 1;

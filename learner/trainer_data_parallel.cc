@@ -68,6 +68,8 @@ std::vector<SharedSetting> SharedSettings(const TrainerConfig& c) {
       {"max_grad_norm", Text(c.max_grad_norm)},
       {"amp_reward_weight", absl::StrCat(Text(c.amp_reward_weight), " (task ", Text(c.task_reward_weight), ")")},
       {"energy_weight", Text(c.energy_weight)},
+      {"imitation_kernels", ImitationKernelsText(c.imitation_kernels)},
+      {"noise_hold_steps", Text(c.noise_hold_steps)},
       {"discriminator_learning_rate", Text(c.discriminator_learning_rate)},
       {"gradient_penalty_weight", Text(c.gradient_penalty_weight)},
       {"discriminator_epochs", Text(c.discriminator_epochs)},

@@ -469,6 +469,9 @@ TEST(LearnerTrainingTest, BadConfigurationsAreClearErrors) {
       {[](TrainerConfig* c) { c->energy_weight = -1; }, "--energy_weight"},
       {[&](TrainerConfig* c) { c->energy_weight = nan; }, "--energy_weight"},
       {[](TrainerConfig* c) { c->model.amp_frames = -2; }, "--amp_frames"},
+      {[](TrainerConfig* c) { c->imitation_kernels.rot = -1; }, "--imitation_kernels"},
+      {[](TrainerConfig* c) { c->noise_hold_steps = 0; }, "--noise_hold_steps"},
+      {[&](TrainerConfig* c) { c->imitation_kernels.pos = nan; }, "--imitation_kernels"},
       {[](TrainerConfig* c) { c->model.controller_hidden = {256, 0}; }, "--controller_hidden"},
       {[](TrainerConfig* c) { c->model.critic_hidden = {-3}; }, "--critic_hidden"},
       {[](TrainerConfig* c) { c->curriculum_start = 0.25, c->curriculum_end = 1.0; }, "--termination_curriculum"},
@@ -487,6 +490,29 @@ TEST(LearnerTrainingTest, BadConfigurationsAreClearErrors) {
     EXPECT_THAT(std::string(status.message()), HasSubstr(b.flag));
     EXPECT_FALSE(Trainer::Create(broken).ok()) << b.flag;
   }
+}
+
+// --imitation_kernels: TERM=K pairs, each term once; the text round-trips.
+TEST(LearnerTrainingTest, ParsesImitationKernels) {
+  auto kernels = ParseImitationKernels("pos=400,ang_vel=0.5");
+  ASSERT_TRUE(kernels.ok()) << kernels.status();
+  EXPECT_DOUBLE_EQ(kernels->pos, 400);
+  EXPECT_DOUBLE_EQ(kernels->rot, 0);
+  EXPECT_DOUBLE_EQ(kernels->ang_vel, 0.5);
+  EXPECT_EQ(ImitationKernelsText(*kernels), "pos=400,ang_vel=0.5");
+  EXPECT_FALSE(ParseImitationKernels("").value().any());
+  for (const char* bad : {"pos", "pos=x", "hand=3", "pos=1,pos=2", "rot=-1", "vel=nan", "pos=20000", "pos=1,"}) {
+    auto parsed = ParseImitationKernels(bad);
+    ASSERT_FALSE(parsed.ok()) << bad;
+    EXPECT_THAT(std::string(parsed.status().message()), HasSubstr("--imitation_kernels")) << bad;
+  }
+  TrainerConfig task = *TrainerConfig::ForPreset("small");
+  task.servers = {"localhost:1"};
+  task.run_dir = "/tmp";
+  task.task = "reach";
+  task.skills = "skills.pt";
+  task.imitation_kernels.pos = 400;
+  EXPECT_THAT(std::string(task.Validate().message()), HasSubstr("--imitation_kernels: task reach"));
 }
 
 // A few iterations on one clip: the mean episode return rises (measured with this seed:

@@ -151,6 +151,15 @@ TEST_F(SimulationServerTest, BadSessionConfigsAreRejected) {
     config.set_energy_weight(weight);
     cases.push_back({config, absl::StatusCode::kInvalidArgument, "energy_weight"});
   }
+  for (float k : {-1.f, std::nanf(""), std::numeric_limits<float>::infinity(), 10001.f}) {
+    config = Config(2);
+    config.mutable_imitation_kernels()->set_rot(k);
+    cases.push_back({config, absl::StatusCode::kInvalidArgument, "imitation_kernels.rot"});
+  }
+  config = Config(2);
+  config.set_task("reach");
+  config.mutable_imitation_kernels()->set_pos(400);
+  cases.push_back({config, absl::StatusCode::kInvalidArgument, "imitation_kernels: task reach"});
   for (const Case& c : cases) {
     auto stream = client_->OpenSession(c.config);
     ASSERT_FALSE(stream.ok()) << c.message;
@@ -263,26 +272,34 @@ TEST_F(SimulationServerTest, TooManySessionsIsResourceExhausted) {
   EXPECT_TRUE(again.ok()) << again.status();
 }
 
+// Six steps of zero actions in 4 envs of `config` (no termination, so that no row resets):
+// every step's reward_terms and reward, appended.
+void StepZeroActions(SimulationClient& client, v1::SessionConfig config, std::vector<float>* terms,
+                     std::vector<float>* rewards) {
+  config.set_termination(v1::NONE);
+  auto stream = client.OpenSession(config);
+  ASSERT_TRUE(stream.ok()) << stream.status();
+  std::vector<float> zeros(4 * 69, 0.f), step_terms, reward;
+  for (int s = 0; s < 6; ++s) {
+    ASSERT_TRUE((*stream)->Step(zeros.data()).ok());
+    ASSERT_TRUE(ReadFloatTensor((*stream)->result().reward_terms(), "reward_terms", &step_terms).ok());
+    ASSERT_TRUE(ReadFloatTensor((*stream)->result().reward(), "reward", &reward).ok());
+    terms->insert(terms->end(), step_terms.begin(), step_terms.end());
+    rewards->insert(rewards->end(), reward.begin(), reward.end());
+  }
+  ASSERT_TRUE((*stream)->Close().ok());
+}
+
 // SessionConfig.energy_weight scales the energy column (and so the reward) and nothing else.
 TEST_F(SimulationServerTest, EnergyWeightScalesTheEnergyTerm) {
   auto run = [&](std::optional<float> weight, std::vector<float>* terms, std::vector<float>* rewards) {
     v1::SessionConfig config = Config(4, 9);
-    config.set_termination(v1::NONE);  // no resets: every row is past the energy-free steps
     if (weight) config.set_energy_weight(*weight);
-    auto stream = client_->OpenSession(config);
-    ASSERT_TRUE(stream.ok()) << stream.status();
-    std::vector<float> zeros(4 * 69, 0.f), step_terms, reward;
-    for (int s = 0; s < 6; ++s) {
-      ASSERT_TRUE((*stream)->Step(zeros.data()).ok());
-      ASSERT_TRUE(ReadFloatTensor((*stream)->result().reward_terms(), "reward_terms", &step_terms).ok());
-      ASSERT_TRUE(ReadFloatTensor((*stream)->result().reward(), "reward", &reward).ok());
-      terms->insert(terms->end(), step_terms.begin(), step_terms.end());
-      rewards->insert(rewards->end(), reward.begin(), reward.end());
-    }
-    ASSERT_TRUE((*stream)->Close().ok());
+    StepZeroActions(*client_, config, terms, rewards);
   };
   std::vector<float> paper, paper_reward, doubled, doubled_reward, off, off_reward;
   run(std::nullopt, &paper, &paper_reward);
+  ASSERT_FALSE(paper_reward.empty());
   run(2.f, &doubled, &doubled_reward);
   run(0.f, &off, &off_reward);
   const size_t columns = paper.size() / paper_reward.size();
@@ -298,6 +315,31 @@ TEST_F(SimulationServerTest, EnergyWeightScalesTheEnergyTerm) {
     EXPECT_NEAR(doubled_reward[row], paper_reward[row] + paper[energy], 1e-5) << row;
   }
   EXPECT_LT(paper_energy, 0.0) << "zero actions spend power";
+}
+
+// SessionConfig.imitation_kernels: a term with k x 4 is w (term / w)^4 of the default's, for the
+// same states; the other terms are untouched.
+TEST_F(SimulationServerTest, ImitationKernelsSteepenTheirTerm) {
+  std::vector<float> base, base_reward, steep, steep_reward;
+  StepZeroActions(*client_, Config(4, 9), &base, &base_reward);
+  v1::SessionConfig config = Config(4, 9);
+  config.mutable_imitation_kernels()->set_pos(400);  // PHC's 100 x 4
+  StepZeroActions(*client_, config, &steep, &steep_reward);
+  ASSERT_FALSE(base_reward.empty());
+  ASSERT_EQ(base.size(), steep.size());
+  const size_t columns = base.size() / base_reward.size();
+  const double w_pos = ImitationRewardConfig().w_pos;
+  double base_sum = 0, steep_sum = 0;
+  for (size_t row = 0; row < base_reward.size(); ++row) {
+    const float pos = base[row * columns + kRewardPos];
+    EXPECT_NEAR(steep[row * columns + kRewardPos], w_pos * std::pow(pos / w_pos, 4), 1e-5) << row;
+    for (size_t c = 0; c < columns; ++c) {
+      if (c != static_cast<size_t>(kRewardPos)) EXPECT_EQ(steep[row * columns + c], base[row * columns + c]) << row;
+    }
+    base_sum += pos;
+    steep_sum += steep[row * columns + kRewardPos];
+  }
+  EXPECT_LT(steep_sum, base_sum - 1e-3) << "zero actions leave the reference: a steeper kernel pays less";
 }
 
 TEST_F(SimulationServerTest, TwoConcurrentSessions) {

@@ -127,6 +127,12 @@ ABSL_FLAG(double, amp_reward_weight, -1,
 ABSL_FLAG(double, energy_weight, 1,
           "the sessions' energy penalty as a multiple of the paper's (SessionConfig.energy_weight; 1: the paper's; 0: off, so that "
           "no step of a goal task is negative and falling never pays)");
+ABSL_FLAG(std::string, imitation_kernels, "",
+          "the imitation reward's kernels, e.g. pos=400,rot=20 (terms pos, rot, vel, ang_vel; each term is "
+          "w exp(-k x its mean squared error); unnamed terms keep PHC's 100, 10, 0.1, 0.1)");
+ABSL_FLAG(int, noise_hold_steps, 1,
+          "each env keeps its exploration noise for this many control steps on average (geometric, redrawn when its "
+          "episode ends); 1: fresh every step. For task heads, whose per-step z noise the skills average away");
 ABSL_FLAG(std::string, action_mode, "", "absolute (PD target = offset + scale * a, the paper's) or residual "
           "(the reference pose + residual_scale * scale * a); default: the preset's (small: residual, paper: absolute)");
 ABSL_FLAG(double, residual_scale, 0.5, "residual mode: share of each hinge's action scale an action of 1 moves");
@@ -432,6 +438,10 @@ absl::StatusOr<TrainerConfig> ConfigFromFlags(const std::string& token) {
   config->amp_reward_weight = amp_weight;
   config->task_reward_weight = 1 - amp_weight;
   config->energy_weight = absl::GetFlag(FLAGS_energy_weight);
+  auto kernels = ParseImitationKernels(absl::GetFlag(FLAGS_imitation_kernels));
+  if (!kernels.ok()) return kernels.status();
+  config->imitation_kernels = *kernels;
+  config->noise_hold_steps = absl::GetFlag(FLAGS_noise_hold_steps);
   if (!absl::GetFlag(FLAGS_action_mode).empty()) config->action_mode = absl::GetFlag(FLAGS_action_mode);
   config->residual_scale = absl::GetFlag(FLAGS_residual_scale);
   config->termination_distance = absl::GetFlag(FLAGS_termination_distance);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
@@ -75,6 +76,30 @@ absl::StatusOr<double> ToEnergyCoefficient(const v1::SessionConfig& config, bool
         absl::StrCat("energy_weight: ", weight, " set, but a family session has no energy penalty (0 or unset)"));
   }
   return paper * weight;
+}
+
+absl::Status ApplyImitationKernels(const v1::SessionConfig& config, TaskKind task, ImitationRewardConfig* reward) {
+  if (!config.has_imitation_kernels()) return absl::OkStatus();
+  if (IsGoalTask(task)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("imitation_kernels: task ", TaskInfoOf(task).name, " has no imitation reward"));
+  }
+  const v1::ImitationKernels& wire = config.imitation_kernels();
+  const std::pair<const char*, std::pair<float, double*>> kernels[] = {
+      {"pos", {wire.pos(), &reward->k_pos}},
+      {"rot", {wire.rot(), &reward->k_rot}},
+      {"vel", {wire.vel(), &reward->k_vel}},
+      {"ang_vel", {wire.ang_vel(), &reward->k_ang_vel}}};
+  for (const auto& [name, value_and_target] : kernels) {
+    const float k = value_and_target.first;
+    if (k == 0) continue;  // the default
+    if (!(std::isfinite(k) && k > 0 && k <= 10000)) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("imitation_kernels.", name, ": ", k, " must be finite, in (0, 10000] (0: the default)"));
+    }
+    *value_and_target.second = k;
+  }
+  return absl::OkStatus();
 }
 
 absl::StatusOr<std::vector<ParamRange>> ToFamilyRanges(const v1::SessionConfig& config, ActionMode action_mode,
@@ -156,6 +181,7 @@ absl::StatusOr<SessionSettings> ParseSessionConfig(const v1::SessionConfig& conf
     return absl::InvalidArgumentError(absl::StrCat("reward_relative_to_root: task ", TaskInfoOf(*task).name,
                                                    " has no imitation reward"));
   }
+  if (absl::Status status = ApplyImitationKernels(config, *task, &settings.env.reward); !status.ok()) return status;
   settings.amp_frames = config.amp_obs() == v1::NEWEST ? 1 : config.amp_obs() == v1::OMIT ? 0 : kAmpHistory;
   if (config.motions_size() > max_library_clips) {
     return absl::InvalidArgumentError(absl::StrCat("motions: ", config.motions_size(),

@@ -30,7 +30,7 @@ struct SessionSettings {
 // The checks in the order the service reports them: num_envs in [1, max_envs_per_session]
 // (above: RESOURCE_EXHAUSTED), max_episode_steps >= 0, the layout (NOT_FOUND), termination,
 // its distance, action mode and residual scale, termination bodies, amp_obs, the task and its
-// settings, the family, reward_parts, reward_relative_to_root, no more motion names than max_library_clips (INVALID_ARGUMENT). The clip names themselves are left to the library.
+// settings, the family, reward_parts, reward_relative_to_root, imitation_kernels, no more motion names than max_library_clips (INVALID_ARGUMENT). The clip names themselves are left to the library.
 absl::StatusOr<SessionSettings> ParseSessionConfig(const v1::SessionConfig& config, int max_envs_per_session,
                                                    int max_library_clips, const PartLayoutCatalog& layouts);
 
@@ -51,6 +51,9 @@ absl::StatusOr<std::vector<ParamRange>> ToFamilyRanges(const v1::SessionConfig& 
 // The energy penalty's coefficient: the paper's x SessionConfig.energy_weight (unset: 1);
 // INVALID_ARGUMENT naming energy_weight outside [0, 100] or non-zero in a family session.
 absl::StatusOr<double> ToEnergyCoefficient(const v1::SessionConfig& config, bool family);
+// SessionConfig.imitation_kernels into `reward` (a 0 field keeps its default); INVALID_ARGUMENT
+// naming imitation_kernels.<term> outside (0, 10000], or imitation_kernels for a goal task.
+absl::Status ApplyImitationKernels(const v1::SessionConfig& config, TaskKind task, ImitationRewardConfig* reward);
 // The bodies of the named parts of `layout`, sorted (empty for none: every body); INVALID_ARGUMENT
 // naming reward_parts[i] for an unknown or repeated part, or reward_parts for a goal task.
 absl::StatusOr<std::vector<int>> ToRewardBodies(const google::protobuf::RepeatedPtrField<std::string>& reward_parts,

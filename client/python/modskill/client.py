@@ -380,7 +380,8 @@ class Client:
                 task_settings: Optional[Mapping[str, float]] = None, loop_clips: bool = False,
                 family: Optional[Mapping[str, Union[float, Tuple[float, float]]]] = None,
                 reward_parts: Sequence[str] = (), reward_relative_to_root: bool = False,
-                anchor_reference: bool = False, energy_weight: Optional[float] = None) -> "Session":
+                anchor_reference: bool = False, energy_weight: Optional[float] = None,
+                imitation_kernels: Optional[Mapping[str, float]] = None) -> "Session":
         """Opens a simulation session of ``num_envs`` envs and returns it once the server has
         reset them (``Session.initial`` holds the first observations).
 
@@ -420,6 +421,8 @@ class Client:
             termination ask the character to go on from where it is, not to win back drift.
           energy_weight: the energy penalty as a multiple of the paper's, in [0, 100]; None: 1.
             0 turns it off (its ``reward_terms`` column stays, at 0).
+          imitation_kernels: tracking only: the imitation reward's k per term, e.g. {"pos": 400};
+            keys pos, rot, vel, ang_vel, each in (0, 10000]; a missing key keeps PHC's default.
 
         Use it as a context manager (or call ``close()``) so that the server frees the envs.
         """
@@ -443,6 +446,8 @@ class Client:
                                   anchor_reference=bool(anchor_reference))
         if energy_weight is not None:
             config.energy_weight = float(energy_weight)
+        if imitation_kernels:
+            config.imitation_kernels.CopyFrom(pb.ImitationKernels(**{k: float(v) for k, v in imitation_kernels.items()}))
         session = Session(self, config)
         self._sessions.add(session)
         return session
