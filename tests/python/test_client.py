@@ -298,6 +298,18 @@ class ClientTest(unittest.TestCase):
             with self.client.session(1, energy_weight=-1.0) as session:
                 session.step(np.zeros((1, 69), np.float32))
         self.assertIn("energy_weight", caught.exception.message)
+        # imitation_kernels={"pos": 400}: the position term is w (term / w)^4, the others unchanged.
+        with self.client.session(2, imitation_kernels={"pos": 400}, **kwargs) as steep, \
+                self.client.session(2, **kwargs) as phc:
+            for _ in range(5):
+                sharp, soft = steep.step(zeros), phc.step(zeros)
+            w_pos = 0.5
+            np.testing.assert_allclose(sharp.reward_terms[:, 0], w_pos * (soft.reward_terms[:, 0] / w_pos) ** 4, atol=1e-5)
+            np.testing.assert_array_equal(sharp.reward_terms[:, 1:], soft.reward_terms[:, 1:])
+        with self.assertRaises(modskill.ServerError) as caught:
+            with self.client.session(1, imitation_kernels={"rot": -2.0}) as session:
+                session.step(np.zeros((1, 69), np.float32))
+        self.assertIn("imitation_kernels.rot", caught.exception.message)
 
     def test_action_modes_and_termination_distance(self):
         self.assertEqual(list(self.client.describe().action_modes), ["absolute", "residual"])
