@@ -78,6 +78,21 @@ absl::StatusOr<double> ToEnergyCoefficient(const v1::SessionConfig& config, bool
   return paper * weight;
 }
 
+absl::Status CheckTrackingOnlyFields(const v1::SessionConfig& config, TaskKind task) {
+  if (config.loop_clips() && task != TaskKind::kTracking) {
+    return absl::InvalidArgumentError(absl::StrCat("loop_clips: tracking only; task ", TaskInfoOf(task).name,
+                                                   " has its own episode ends"));
+  }
+  if (config.anchor_reference() && task != TaskKind::kTracking) {
+    return absl::InvalidArgumentError(absl::StrCat("anchor_reference: tracking only; task ", TaskInfoOf(task).name,
+                                                   " does not track a reference"));
+  }
+  if (config.anchor_reference() && config.family().params_size() > 0) {
+    return absl::InvalidArgumentError("anchor_reference: not for a family session (its clip is tracked where it is)");
+  }
+  return absl::OkStatus();
+}
+
 absl::Status ApplyImitationKernels(const v1::SessionConfig& config, TaskKind task, ImitationRewardConfig* reward) {
   if (!config.has_imitation_kernels()) return absl::OkStatus();
   if (IsGoalTask(task)) {
@@ -160,17 +175,7 @@ absl::StatusOr<SessionSettings> ParseSessionConfig(const v1::SessionConfig& conf
   if (!task.ok()) return task.status();
   auto task_settings = ToTaskSettings(config.task_settings());
   if (!task_settings.ok()) return task_settings.status();
-  if (config.loop_clips() && *task != TaskKind::kTracking) {
-    return absl::InvalidArgumentError(absl::StrCat("loop_clips: tracking only; task ", TaskInfoOf(*task).name,
-                                                   " has its own episode ends"));
-  }
-  if (config.anchor_reference() && *task != TaskKind::kTracking) {
-    return absl::InvalidArgumentError(absl::StrCat("anchor_reference: tracking only; task ", TaskInfoOf(*task).name,
-                                                   " does not track a reference"));
-  }
-  if (config.anchor_reference() && config.family().params_size() > 0) {
-    return absl::InvalidArgumentError("anchor_reference: not for a family session (its clip is tracked where it is)");
-  }
+  if (absl::Status status = CheckTrackingOnlyFields(config, *task); !status.ok()) return status;
   auto family_ranges = ToFamilyRanges(config, action_mapping->mode, *task);
   if (!family_ranges.ok()) return family_ranges.status();
   auto reward_bodies = ToRewardBodies(config.reward_parts(), *layout, *task);

@@ -51,6 +51,9 @@ absl::StatusOr<std::vector<ParamRange>> ToFamilyRanges(const v1::SessionConfig& 
 // The energy penalty's coefficient: the paper's x SessionConfig.energy_weight (unset: 1);
 // INVALID_ARGUMENT naming energy_weight outside [0, 100] or non-zero in a family session.
 absl::StatusOr<double> ToEnergyCoefficient(const v1::SessionConfig& config, bool family);
+// loop_clips and anchor_reference in tracking only, anchor_reference not in a family session;
+// INVALID_ARGUMENT naming the field otherwise.
+absl::Status CheckTrackingOnlyFields(const v1::SessionConfig& config, TaskKind task);
 // SessionConfig.imitation_kernels into `reward` (a 0 field keeps its default); INVALID_ARGUMENT
 // naming imitation_kernels.<term> outside (0, 10000], or imitation_kernels for a goal task.
 absl::Status ApplyImitationKernels(const v1::SessionConfig& config, TaskKind task, ImitationRewardConfig* reward);
