@@ -25,8 +25,6 @@ class HeldNoise {
   // Rows of `stream` whose episode ended (done [rows] > 0.5) draw fresh noise next step.
   void EpisodesEnded(size_t stream, const torch::Tensor& done);
 
-  int hold_steps() const { return hold_steps_; }
-
  private:
   int hold_steps_;
   std::vector<torch::Tensor> noise_;   // per stream, [rows, dims]; undefined before its first step
