@@ -1,6 +1,7 @@
-// Every importable format yields a grounded, kinematically consistent clip, and clips get their
-// default names from their files.
+// Every importable format yields a grounded, kinematically consistent clip, the pitch of its
+// stance feet is measured, and clips get their default names from their files.
 #include "server/core/motion/motion_import.h"
+#include "server/core/motion/stance_feet.h"
 
 #include "tests/motion_import_fixtures.h"
 
@@ -120,6 +121,45 @@ TEST(DefaultClipName, ByFormat) {
   EXPECT_EQ(DefaultClipName("/data/cmu/131_01.bvh"), "cmu_131_01");
   EXPECT_EQ(DefaultClipName("foo.npz"), "foo");
   EXPECT_EQ(DefaultClipName("/amass/ACCAD/walk_poses.npz"), "walk_poses");
+}
+
+// ---------------------------------------------------------------------------------------------
+// 8. Stance feet: a foot that carries the body lies flat.
+
+// Two frames of the rest pose on the ground, both ankles turned by `pitch_deg` (toe up > 0).
+MotionClip StandingClip(double pitch_deg) {
+  const HumanoidSpec& spec = Spec();
+  MotionClip clip;
+  clip.num_frames = 2;
+  clip.num_bodies = spec.num_bodies();
+  clip.root_pos.assign(2, Vec3(0, 0, 1));
+  clip.local_rot.assign(2 * clip.num_bodies, Quat::Identity());
+  // About +y a positive angle lowers +x (the toe): toe up is a negative angle.
+  const Quat tilt(Eigen::AngleAxisd(-pitch_deg * kPi / 180, Vec3::UnitY()));
+  for (int f = 0; f < 2; ++f) {
+    for (const char* ankle : {"L_Ankle", "R_Ankle"}) clip.local(f, spec.BodyIndex(ankle)) = tilt;
+  }
+  EXPECT_TRUE(PlaceOnGround(spec, &clip).ok());
+  return clip;
+}
+
+TEST(StanceFeet, MeasuresTheSolePitchOfFeetOnTheFloor) {
+  const StanceFeet flat = MeasureStanceFeet(Spec(), StandingClip(0));
+  EXPECT_EQ(flat.stance_samples, 4);  // 2 frames x 2 feet
+  EXPECT_NEAR(flat.mean_pitch_deg, 0, 1e-6);
+  EXPECT_NEAR(flat.mean_clearance, 0, 0.002);  // SMPL's right foot sits ~1 mm higher at rest
+  const StanceFeet toe_up = MeasureStanceFeet(Spec(), StandingClip(8));
+  EXPECT_EQ(toe_up.stance_samples, 4);
+  EXPECT_NEAR(toe_up.mean_pitch_deg, 8, 1e-6);
+  // A foot lifted off the floor (and one not slowed down) is not in stance.
+  MotionClip lifted = StandingClip(0);
+  for (int f = 0; f < 2; ++f) {
+    for (const char* body : {"L_Ankle", "L_Toe"}) lifted.body_pos[f * lifted.num_bodies + Spec().BodyIndex(body)].z() += 0.1;
+  }
+  EXPECT_EQ(MeasureStanceFeet(Spec(), lifted).stance_samples, 2);
+  MotionClip moving = StandingClip(0);
+  for (int f = 0; f < 2; ++f) moving.body_vel[f * moving.num_bodies + Spec().BodyIndex("R_Ankle")] = Vec3(1, 0, 0);
+  EXPECT_EQ(MeasureStanceFeet(Spec(), moving).stance_samples, 2);
 }
 
 }  // namespace

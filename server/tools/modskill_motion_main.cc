@@ -26,6 +26,7 @@
 #include "server/core/motion/clip_file.h"
 #include "server/core/motion/clip_view.h"
 #include "server/core/motion/motion_import.h"
+#include "server/core/motion/stance_feet.h"
 #include "server/core/motion/motion_library.h"
 #include "server/core/motion/motion_splice.h"
 #include "server/core/sim/humanoid_spec.h"
@@ -107,6 +108,10 @@ void PrintSummary(const HumanoidSpec& spec, const MotionClip& clip, const std::s
   }
   std::printf("  floor clearance mean %.3f  max %.3f m (lowest point per frame)\n",
               clearance_sum / std::max(1, clip.num_frames), clearance_max);
+  // A foot that carries the body should be flat on the floor: a tilt here is the retargeting's.
+  const StanceFeet stance = MeasureStanceFeet(spec, clip);
+  std::printf("  stance feet     pitch %+.1f deg (toe up > 0)  clearance %.3f m  over %d foot-frames\n",
+              stance.mean_pitch_deg, stance.mean_clearance, stance.stance_samples);
 }
 
 int Import(const std::vector<std::string>& inputs, const HumanoidSpec& spec) {
