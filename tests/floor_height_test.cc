@@ -86,5 +86,43 @@ TEST(FloorHeightTest, TheShippedCmuWalkKeepsAFootOnTheFloor) {
   EXPECT_DOUBLE_EQ(FootContactRatio(Spec(), *clip), 1.0);
 }
 
+TEST(PinFloorToStanceTest, StanceFramesRestOnTheirLowestPointAndGapsInterpolate) {
+  // A window floor at 0; the lowest point bobs 0-2 cm as a retargeted walk's does.
+  const std::vector<double> floor(7, 0.0);
+  const std::vector<double> lowest = {0.010, 0.020, 0.200, 0.300, 0.200, 0.004, 0.012};
+  const std::vector<bool> stance = {false, true, false, false, false, true, false};
+  const std::vector<double> pinned = PinFloorToStance(floor, lowest, stance);
+  EXPECT_NEAR(pinned[0], 0.010, 1e-12);  // before the first anchor the offset holds (capped by its lowest)
+  EXPECT_NEAR(pinned[1], 0.020, 1e-12);  // anchors: on their lowest point
+  EXPECT_NEAR(pinned[5], 0.004, 1e-12);
+  EXPECT_NEAR(pinned[3], 0.012, 1e-12);  // a flight: halfway between the anchors' offsets
+  EXPECT_NEAR(pinned[6], 0.004, 1e-12);  // after the last anchor the offset holds
+  for (size_t f = 0; f < lowest.size(); ++f) EXPECT_LE(pinned[f], lowest[f]) << "frame " << f;
+  EXPECT_EQ(PinFloorToStance(floor, lowest, std::vector<bool>(7, false)), floor);
+}
+
+TEST(PinFloorToStanceTest, TheDeepMimicWalkRestsOnItsStanceFootAndTheJumpStillFlies) {
+  ImportOptions options;
+  options.floor = FloorMode::kStance;
+  auto walk = ImportMotionFile(kDeepMimicWalk, Spec(), options);
+  ASSERT_TRUE(walk.ok()) << walk.status();
+  // The window floor leaves this walk's lowest point 12 mm up on average, 26 mm at most.
+  double clearance = 0, highest = 0;
+  for (int f = 0; f < walk->num_frames; ++f) {
+    const double lowest = LowestGeomPoint(Spec(), *walk, f);
+    EXPECT_GE(lowest, -1e-9) << "frame " << f;
+    clearance += lowest / walk->num_frames;
+    highest = std::max(highest, lowest);
+  }
+  EXPECT_LT(clearance, 0.003);
+  EXPECT_LT(highest, 0.015);
+  const std::string jump_path = std::string(MODSKILL_REPO_DIR) + "/data/motions/source/deepmimic/humanoid3d_jump.txt";
+  auto jump = ImportMotionFile(jump_path, Spec(), options);
+  ASSERT_TRUE(jump.ok()) << jump.status();
+  double apex = 0;
+  for (int f = 0; f < jump->num_frames; ++f) apex = std::max(apex, LowestGeomPoint(Spec(), *jump, f));
+  EXPECT_GT(apex, 0.15);  // 0.21 m on the window floor
+}
+
 }  // namespace
 }  // namespace modskill

@@ -35,8 +35,11 @@
 
 ABSL_FLAG(std::string, out, "", "import, splice: directory the .msclip files are written to");
 ABSL_FLAG(std::string, labels, "", "import: CSV 'name,humanml3d_id,label' giving clips their captions");
-ABSL_FLAG(double, fps, 30.0, "import, view: rate the clips are resampled to (the control rate)");
-ABSL_FLAG(bool, ground, true, "import, view: shift each clip so that its lowest point touches the floor");
+ABSL_FLAG(double, fps, 30.0, "import, inspect, view: rate the clips are resampled to (the control rate)");
+ABSL_FLAG(bool, ground, true, "import, inspect, view: shift each clip so that its lowest point touches the floor");
+ABSL_FLAG(std::string, floor, "window",
+          "import, inspect, view: the floor a clip is put on: 'window' (a low quantile of the lowest points within "
+          "0.5 s) or 'stance' (that floor pinned to the supporting foot wherever one carries the body)");
 ABSL_FLAG(std::string, html, "", "view: the HTML page written (written atomically: no partial file)");
 ABSL_FLAG(std::vector<std::string>, parts, {}, "splice: the parts (of --layout) whose motion comes from SOURCE");
 ABSL_FLAG(std::string, layout, "", "splice: the part layout naming --parts (default: data/part_layouts.json's)");
@@ -73,6 +76,20 @@ bool ReadLabels(const std::string& path, std::map<std::string, ClipLabel>* label
                                      std::string(absl::StripAsciiWhitespace(fields[2]))};
   }
   return true;
+}
+
+// --fps, --ground and --floor as import options.
+absl::StatusOr<ImportOptions> ImportOptionsFromFlags() {
+  ImportOptions options;
+  options.target_fps = absl::GetFlag(FLAGS_fps);
+  options.place_on_ground = absl::GetFlag(FLAGS_ground);
+  const std::string floor = absl::GetFlag(FLAGS_floor);
+  if (floor == "stance") {
+    options.floor = FloorMode::kStance;
+  } else if (floor != "window") {
+    return absl::InvalidArgumentError(absl::StrFormat("--floor '%s': expected window or stance", floor));
+  }
+  return options;
 }
 
 void PrintSummary(const HumanoidSpec& spec, const MotionClip& clip, const std::string& file) {
@@ -120,6 +137,11 @@ int Import(const std::vector<std::string>& inputs, const HumanoidSpec& spec) {
     std::fprintf(stderr, "error: import needs --out DIR\n");
     return 2;
   }
+  const absl::StatusOr<ImportOptions> options = ImportOptionsFromFlags();
+  if (!options.ok()) {
+    std::fprintf(stderr, "error: %s\n", std::string(options.status().message()).c_str());
+    return 2;
+  }
   std::map<std::string, ClipLabel> labels;
   if (!absl::GetFlag(FLAGS_labels).empty() && !ReadLabels(absl::GetFlag(FLAGS_labels), &labels)) return 2;
   std::error_code error;
@@ -128,12 +150,9 @@ int Import(const std::vector<std::string>& inputs, const HumanoidSpec& spec) {
     std::fprintf(stderr, "error: --out %s: %s\n", out_dir.c_str(), error.message().c_str());
     return 2;
   }
-  ImportOptions options;
-  options.target_fps = absl::GetFlag(FLAGS_fps);
-  options.place_on_ground = absl::GetFlag(FLAGS_ground);
   int failures = 0;
   for (const std::string& input : inputs) {
-    ImportOptions file_options = options;
+    ImportOptions file_options = *options;
     auto label = labels.find(DefaultClipName(input));
     if (label != labels.end()) {
       file_options.label = label->second.label;
@@ -165,10 +184,14 @@ int Import(const std::vector<std::string>& inputs, const HumanoidSpec& spec) {
 }
 
 int Inspect(const std::vector<std::string>& files, const HumanoidSpec& spec) {
+  const absl::StatusOr<ImportOptions> options = ImportOptionsFromFlags();
+  if (!options.ok()) {
+    std::fprintf(stderr, "error: %s\n", std::string(options.status().message()).c_str());
+    return 2;
+  }
   int failures = 0;
   for (const std::string& file : files) {
-    ImportOptions options;
-    auto clip = ImportMotionFile(file, spec, options);
+    auto clip = ImportMotionFile(file, spec, *options);
     if (!clip.ok()) {
       std::fprintf(stderr, "error: %s\n", std::string(clip.status().message()).c_str());
       ++failures;
@@ -185,10 +208,9 @@ absl::StatusOr<MotionClip> ResolveClip(const std::string& input, const HumanoidS
                                        std::optional<MotionLibrary>* library) {
   std::error_code error;
   if (std::filesystem::exists(input, error)) {
-    ImportOptions options;
-    options.target_fps = absl::GetFlag(FLAGS_fps);
-    options.place_on_ground = absl::GetFlag(FLAGS_ground);
-    return ImportMotionFile(input, spec, options);
+    absl::StatusOr<ImportOptions> options = ImportOptionsFromFlags();
+    if (!options.ok()) return options.status();
+    return ImportMotionFile(input, spec, *options);
   }
   if (!library->has_value()) {
     absl::StatusOr<MotionLibrary> loaded = MotionLibrary::LoadDefault(spec);
@@ -300,8 +322,8 @@ int Splice(const std::vector<std::string>& inputs, const HumanoidSpec& spec) {
 int main(int argc, char** argv) {
   absl::SetProgramUsageMessage(
       "imports, inspects, views and splices motion clips.\n"
-      "  modskill-motion import IN... --out DIR [--labels CSV] [--fps 30]\n"
-      "  modskill-motion inspect FILE...\n"
+      "  modskill-motion import IN... --out DIR [--labels CSV] [--fps 30] [--floor window|stance]\n"
+      "  modskill-motion inspect FILE... [--fps 30] [--floor window|stance]\n"
       "  modskill-motion view CLIP... --html OUT.html  (CLIP: a motion file or a library clip name)\n"
       "  modskill-motion splice BASE SOURCE --parts R_Arm,L_Arm --name NAME --out DIR [--timing stretch|clip]\n"
       "Formats: AMASS/SMPL(-H) .npz, CMU .bvh, DeepMimic humanoid3d .txt, native .msclip");

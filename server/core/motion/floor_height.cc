@@ -91,4 +91,30 @@ std::vector<double> FloorHeights(const std::vector<double>& lowest, double fps, 
   return floor;
 }
 
+std::vector<double> PinFloorToStance(const std::vector<double>& floor, const std::vector<double>& lowest,
+                                     const std::vector<bool>& stance) {
+  const int frames = static_cast<int>(floor.size());
+  std::vector<int> anchors;
+  for (int f = 0; f < frames; ++f) {
+    if (stance[f]) anchors.push_back(f);
+  }
+  if (anchors.empty()) return floor;
+  std::vector<double> pinned(frames);
+  size_t next = 0;  // the first anchor at or after f
+  for (int f = 0; f < frames; ++f) {
+    while (next < anchors.size() && anchors[next] < f) ++next;
+    const int after = anchors[std::min(next, anchors.size() - 1)];
+    const int before = next > 0 ? anchors[next - 1] : after;
+    const double offset_before = lowest[before] - floor[before], offset_after = lowest[after] - floor[after];
+    double offset = offset_after;
+    if (after > f && before < f) {
+      offset = offset_before + (offset_after - offset_before) * (f - before) / static_cast<double>(after - before);
+    } else if (after < f) {
+      offset = offset_after;  // past the last anchor: hold
+    }
+    pinned[f] = std::min(floor[f] + offset, lowest[f]);
+  }
+  return pinned;
+}
+
 }  // namespace modskill

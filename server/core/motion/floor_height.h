@@ -28,6 +28,14 @@ struct FloorHeightOptions {
 std::vector<double> FloorHeights(const std::vector<double>& lowest, double fps,
                                  const FloorHeightOptions& options = {});
 
+// The floor pinned to the supporting foot. Where `stance[f]` (a foot carries the body in frame
+// f), the floor is that frame's lowest point: FloorHeights' quantile leaves a retargeted walk's
+// stance foot up to ~2.6 cm above it between the frames it averages. Between stance frames the
+// offset from `floor` runs linearly (a flight keeps its height above the contacts at its ends);
+// before the first and after the last it holds. Never above a frame's lowest point.
+std::vector<double> PinFloorToStance(const std::vector<double>& floor, const std::vector<double>& lowest,
+                                     const std::vector<bool>& stance);
+
 }  // namespace modskill
 
 #endif  // MODSKILL_SERVER_CORE_MOTION_FLOOR_HEIGHT_H_

@@ -1,6 +1,7 @@
 #include "server/core/motion/motion_clip.h"
 
 #include "server/core/motion/floor_height.h"
+#include "server/core/motion/stance_feet.h"
 #include "server/core/sim/body_kinematics.h"
 
 #include <algorithm>
@@ -155,13 +156,14 @@ double LowestGeomPoint(const HumanoidSpec& spec, const MotionClip& clip, int fra
   return lowest;
 }
 
-absl::Status PlaceOnGround(const HumanoidSpec& spec, MotionClip* clip) {
+absl::Status PlaceOnGround(const HumanoidSpec& spec, MotionClip* clip, FloorMode mode) {
   if (auto status = ComputeClipKinematics(spec, clip); !status.ok()) return status;
   std::vector<double> lowest(clip->num_frames);
   for (int f = 0; f < clip->num_frames; ++f) lowest[f] = LowestGeomPoint(spec, *clip, f);
   // The floor follows the clip, never above a frame's lowest point (floor_height.h): one
   // constant shift leaves stretches of a retargeted clip floating.
-  const std::vector<double> floor = FloorHeights(lowest, clip->fps);
+  std::vector<double> floor = FloorHeights(lowest, clip->fps);
+  if (mode == FloorMode::kStance) floor = PinFloorToStance(floor, lowest, StanceFrames(spec, *clip, floor));
   for (int f = 0; f < clip->num_frames; ++f) clip->root_pos[f].z() -= floor[f];
   return ComputeClipKinematics(spec, clip);
 }

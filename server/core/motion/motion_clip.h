@@ -65,10 +65,16 @@ absl::StatusOr<MotionClip> ResampleClip(const MotionClip& clip, double fps,
 // Lowest point of the collision geometry in one frame (needs body_pos/body_rot).
 double LowestGeomPoint(const HumanoidSpec& spec, const MotionClip& clip, int frame);
 
+// Which floor PlaceOnGround puts a clip on (floor_height.h).
+enum class FloorMode {
+  kWindow,  // FloorHeights: a low quantile of the lowest points around each frame
+  kStance,  // and then pinned to the supporting foot wherever one carries the body
+};
+
 // Shifts each frame vertically by the floor under it (floor_height.h: a slowly varying height
 // that the clip's contacts touch, never above a frame's lowest geometry point), so that the
 // contacts rest on z = 0 and no frame is in the ground; then recomputes kinematics.
-absl::Status PlaceOnGround(const HumanoidSpec& spec, MotionClip* clip);
+absl::Status PlaceOnGround(const HumanoidSpec& spec, MotionClip* clip, FloorMode mode = FloorMode::kWindow);
 
 // Fraction of frames with a foot (ankle or toe geometry) within `threshold` of the ground.
 double FootContactRatio(const HumanoidSpec& spec, const MotionClip& clip, double threshold = 0.03);

@@ -62,7 +62,7 @@ absl::StatusOr<MotionClip> ImportMotionFile(const std::string& path, const Human
     resampled = ResampleClip(*resampled, options.target_fps, options.limits);
   }
   if (!resampled.ok()) return absl::InvalidArgumentError(absl::StrCat(path, ": ", resampled.status().message()));
-  const absl::Status status = options.place_on_ground && !is_native ? PlaceOnGround(spec, &*resampled)
+  const absl::Status status = options.place_on_ground && !is_native ? PlaceOnGround(spec, &*resampled, options.floor)
                                                                      : ComputeClipKinematics(spec, &*resampled);
   if (!status.ok()) return absl::InvalidArgumentError(absl::StrCat(path, ": ", status.message()));
   return *std::move(resampled);

@@ -17,6 +17,7 @@ namespace modskill {
 struct ImportOptions {
   double target_fps = 30.0;     // the control rate
   bool place_on_ground = true;  // lowest geometry over the clip touches z = 0
+  FloorMode floor = FloorMode::kWindow;  // the floor it is placed on (motion_clip.h)
   std::string name;             // default: derived from the file name; checked by ValidateClipName
   std::string label;
   std::string humanml3d_id;

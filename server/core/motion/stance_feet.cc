@@ -29,6 +29,22 @@ std::vector<Foot> Feet(const HumanoidSpec& spec) {
   return feet;
 }
 
+double FootLowestPoint(const HumanoidSpec& spec, const MotionClip& clip, const Foot& foot, int frame) {
+  const int ankle = frame * clip.num_bodies + foot.ankle;
+  double lowest = spec.body(foot.ankle).geom.LowestPoint(clip.body_pos[ankle], clip.body_rot[ankle]);
+  if (foot.toe >= 0) {
+    const int toe = frame * clip.num_bodies + foot.toe;
+    lowest = std::min(lowest, spec.body(foot.toe).geom.LowestPoint(clip.body_pos[toe], clip.body_rot[toe]));
+  }
+  return lowest;
+}
+
+bool InStance(const MotionClip& clip, const Foot& foot, int frame, double foot_lowest, double floor,
+              const StanceFeetOptions& options) {
+  return foot_lowest - floor < options.contact_height &&
+         clip.body_vel[frame * clip.num_bodies + foot.ankle].norm() < options.max_speed;
+}
+
 }  // namespace
 
 StanceFeet MeasureStanceFeet(const HumanoidSpec& spec, const MotionClip& clip, const StanceFeetOptions& options) {
@@ -38,14 +54,9 @@ StanceFeet MeasureStanceFeet(const HumanoidSpec& spec, const MotionClip& clip, c
   double pitch_sum = 0, clearance_sum = 0;
   for (int f = 0; f < clip.num_frames; ++f) {
     for (const Foot& foot : feet) {
-      const int ankle = f * clip.num_bodies + foot.ankle;
-      double lowest = spec.body(foot.ankle).geom.LowestPoint(clip.body_pos[ankle], clip.body_rot[ankle]);
-      if (foot.toe >= 0) {
-        const int toe = f * clip.num_bodies + foot.toe;
-        lowest = std::min(lowest, spec.body(foot.toe).geom.LowestPoint(clip.body_pos[toe], clip.body_rot[toe]));
-      }
-      if (lowest >= options.contact_height || clip.body_vel[ankle].norm() >= options.max_speed) continue;
-      const Vec3 forward = clip.body_rot[ankle] * Vec3::UnitX();
+      const double lowest = FootLowestPoint(spec, clip, foot, f);
+      if (!InStance(clip, foot, f, lowest, 0.0, options)) continue;
+      const Vec3 forward = clip.body_rot[f * clip.num_bodies + foot.ankle] * Vec3::UnitX();
       pitch_sum += std::asin(std::clamp(forward.z(), -1.0, 1.0)) * kRadiansToDegrees;
       clearance_sum += lowest;
       ++result.stance_samples;
@@ -56,6 +67,24 @@ StanceFeet MeasureStanceFeet(const HumanoidSpec& spec, const MotionClip& clip, c
     result.mean_clearance = clearance_sum / result.stance_samples;
   }
   return result;
+}
+
+std::vector<bool> StanceFrames(const HumanoidSpec& spec, const MotionClip& clip, const std::vector<double>& floor,
+                               const StanceFeetOptions& options) {
+  std::vector<bool> stance(clip.num_frames, false);
+  if (clip.body_pos.empty() || clip.body_vel.empty()) return stance;
+  constexpr double kLowestBodyTolerance = 0.005;
+  const std::vector<Foot> feet = Feet(spec);
+  for (int f = 0; f < clip.num_frames; ++f) {
+    const double frame_lowest = LowestGeomPoint(spec, clip, f);
+    for (const Foot& foot : feet) {
+      const double lowest = FootLowestPoint(spec, clip, foot, f);
+      if (lowest <= frame_lowest + kLowestBodyTolerance && InStance(clip, foot, f, lowest, floor[f], options)) {
+        stance[f] = true;
+      }
+    }
+  }
+  return stance;
 }
 
 }  // namespace modskill

@@ -6,6 +6,8 @@
 #ifndef MODSKILL_SERVER_CORE_MOTION_STANCE_FEET_H_
 #define MODSKILL_SERVER_CORE_MOTION_STANCE_FEET_H_
 
+#include <vector>
+
 #include "server/core/motion/motion_clip.h"
 #include "server/core/sim/humanoid_spec.h"
 
@@ -24,6 +26,12 @@ struct StanceFeet {
 
 // Over every frame where an ankle (with its toe) is in stance. Needs the clip's kinematics.
 StanceFeet MeasureStanceFeet(const HumanoidSpec& spec, const MotionClip& clip, const StanceFeetOptions& options = {});
+
+// Per frame: whether a foot carries the body, judged against `floor` (the floor's height under
+// each frame): the foot within contact_height of it, its ankle slower than max_speed, and the
+// foot the frame's lowest body, within 5 mm (a crawl's knees carry it). Needs the kinematics.
+std::vector<bool> StanceFrames(const HumanoidSpec& spec, const MotionClip& clip, const std::vector<double>& floor,
+                               const StanceFeetOptions& options = {});
 
 }  // namespace modskill
 
