@@ -131,15 +131,10 @@ void PrintSummary(const HumanoidSpec& spec, const MotionClip& clip, const std::s
               stance.mean_pitch_deg, stance.mean_clearance, stance.stance_samples);
 }
 
-int Import(const std::vector<std::string>& inputs, const HumanoidSpec& spec) {
+int Import(const std::vector<std::string>& inputs, const HumanoidSpec& spec, const ImportOptions& options) {
   const std::string out_dir = absl::GetFlag(FLAGS_out);
   if (out_dir.empty()) {
     std::fprintf(stderr, "error: import needs --out DIR\n");
-    return 2;
-  }
-  const absl::StatusOr<ImportOptions> options = ImportOptionsFromFlags();
-  if (!options.ok()) {
-    std::fprintf(stderr, "error: %s\n", std::string(options.status().message()).c_str());
     return 2;
   }
   std::map<std::string, ClipLabel> labels;
@@ -152,7 +147,7 @@ int Import(const std::vector<std::string>& inputs, const HumanoidSpec& spec) {
   }
   int failures = 0;
   for (const std::string& input : inputs) {
-    ImportOptions file_options = *options;
+    ImportOptions file_options = options;
     auto label = labels.find(DefaultClipName(input));
     if (label != labels.end()) {
       file_options.label = label->second.label;
@@ -183,15 +178,10 @@ int Import(const std::vector<std::string>& inputs, const HumanoidSpec& spec) {
   return failures == 0 ? 0 : 1;
 }
 
-int Inspect(const std::vector<std::string>& files, const HumanoidSpec& spec) {
-  const absl::StatusOr<ImportOptions> options = ImportOptionsFromFlags();
-  if (!options.ok()) {
-    std::fprintf(stderr, "error: %s\n", std::string(options.status().message()).c_str());
-    return 2;
-  }
+int Inspect(const std::vector<std::string>& files, const HumanoidSpec& spec, const ImportOptions& options) {
   int failures = 0;
   for (const std::string& file : files) {
-    auto clip = ImportMotionFile(file, spec, *options);
+    auto clip = ImportMotionFile(file, spec, options);
     if (!clip.ok()) {
       std::fprintf(stderr, "error: %s\n", std::string(clip.status().message()).c_str());
       ++failures;
@@ -202,16 +192,12 @@ int Inspect(const std::vector<std::string>& files, const HumanoidSpec& spec) {
   return failures == 0 ? 0 : 1;
 }
 
-// A motion file when `input` names one, else the clip of that name in the default library
-// (loaded on first need into `library`).
+// A motion file (imported with `options`) when `input` names one, else the clip of that name in
+// the default library (loaded on first need into `library`).
 absl::StatusOr<MotionClip> ResolveClip(const std::string& input, const HumanoidSpec& spec,
-                                       std::optional<MotionLibrary>* library) {
+                                       const ImportOptions& options, std::optional<MotionLibrary>* library) {
   std::error_code error;
-  if (std::filesystem::exists(input, error)) {
-    absl::StatusOr<ImportOptions> options = ImportOptionsFromFlags();
-    if (!options.ok()) return options.status();
-    return ImportMotionFile(input, spec, *options);
-  }
+  if (std::filesystem::exists(input, error)) return ImportMotionFile(input, spec, options);
   if (!library->has_value()) {
     absl::StatusOr<MotionLibrary> loaded = MotionLibrary::LoadDefault(spec);
     if (!loaded.ok()) {
@@ -231,7 +217,7 @@ absl::StatusOr<MotionClip> ResolveClip(const std::string& input, const HumanoidS
 }
 
 // Every clip must resolve before anything is written: a bad name leaves no page behind.
-int View(const std::vector<std::string>& inputs, const HumanoidSpec& spec) {
+int View(const std::vector<std::string>& inputs, const HumanoidSpec& spec, const ImportOptions& options) {
   const std::string out = absl::GetFlag(FLAGS_html);
   if (out.empty()) {
     std::fprintf(stderr, "error: view needs --html OUT.html\n");
@@ -242,7 +228,7 @@ int View(const std::vector<std::string>& inputs, const HumanoidSpec& spec) {
   scene.bodies = ViewerBodiesFromSpec(spec);
   std::optional<MotionLibrary> library;
   for (const std::string& input : inputs) {
-    absl::StatusOr<MotionClip> clip = ResolveClip(input, spec, &library);
+    absl::StatusOr<MotionClip> clip = ResolveClip(input, spec, options, &library);
     absl::StatusOr<ViewerClip> view = clip.ok() ? ViewerClipFromMotion(*clip) : clip.status();
     if (!view.ok()) {
       std::fprintf(stderr, "error: %s (nothing written to %s)\n", std::string(view.status().message()).c_str(),
@@ -275,7 +261,7 @@ absl::StatusOr<std::vector<int>> PartBodies(const HumanoidSpec& spec) {
   return bodies;
 }
 
-int Splice(const std::vector<std::string>& inputs, const HumanoidSpec& spec) {
+int Splice(const std::vector<std::string>& inputs, const HumanoidSpec& spec, const ImportOptions& options) {
   const std::string out_dir = absl::GetFlag(FLAGS_out);
   if (inputs.size() != 2 || out_dir.empty() || absl::GetFlag(FLAGS_name).empty()) {
     std::fprintf(stderr, "error: splice needs BASE SOURCE --parts P,... --name NAME --out DIR\n");
@@ -286,8 +272,8 @@ int Splice(const std::vector<std::string>& inputs, const HumanoidSpec& spec) {
   absl::StatusOr<SpliceTiming> timing = ParseSpliceTiming(absl::GetFlag(FLAGS_timing));
   absl::StatusOr<std::vector<int>> bodies = PartBodies(spec);
   std::optional<MotionLibrary> library;
-  absl::StatusOr<MotionClip> base = ResolveClip(inputs[0], spec, &library);
-  absl::StatusOr<MotionClip> source = ResolveClip(inputs[1], spec, &library);
+  absl::StatusOr<MotionClip> base = ResolveClip(inputs[0], spec, options, &library);
+  absl::StatusOr<MotionClip> source = ResolveClip(inputs[1], spec, options, &library);
   for (const absl::Status& status : {timing.status(), bodies.status(), base.status(), source.status()}) {
     if (!status.ok()) {
       std::fprintf(stderr, "error: %s\n", std::string(status.message()).c_str());
@@ -342,10 +328,16 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "error: %s\n", std::string(spec.status().message()).c_str());
     return 1;
   }
-  if (command == "import") return modskill::Import(files, *spec);
-  if (command == "inspect") return modskill::Inspect(files, *spec);
-  if (command == "view") return modskill::View(files, *spec);
-  if (command == "splice") return modskill::Splice(files, *spec);
+  // --fps, --ground and --floor, checked once for every command that reads motion files.
+  const absl::StatusOr<modskill::ImportOptions> options = modskill::ImportOptionsFromFlags();
+  if (!options.ok()) {
+    std::fprintf(stderr, "error: %s\n", std::string(options.status().message()).c_str());
+    return 2;
+  }
+  if (command == "import") return modskill::Import(files, *spec, *options);
+  if (command == "inspect") return modskill::Inspect(files, *spec, *options);
+  if (command == "view") return modskill::View(files, *spec, *options);
+  if (command == "splice") return modskill::Splice(files, *spec, *options);
   std::fprintf(stderr, "error: unknown command '%s' (expected import, inspect, view or splice)\n", command.c_str());
   return 2;
 }

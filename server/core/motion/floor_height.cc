@@ -106,11 +106,10 @@ std::vector<double> PinFloorToStance(const std::vector<double>& floor, const std
     const int after = anchors[std::min(next, anchors.size() - 1)];
     const int before = next > 0 ? anchors[next - 1] : after;
     const double offset_before = lowest[before] - floor[before], offset_after = lowest[after] - floor[after];
+    // Between two anchors the offset runs linearly; before the first and after the last it holds.
     double offset = offset_after;
-    if (after > f && before < f) {
+    if (before < f && f < after) {
       offset = offset_before + (offset_after - offset_before) * (f - before) / static_cast<double>(after - before);
-    } else if (after < f) {
-      offset = offset_after;  // past the last anchor: hold
     }
     pinned[f] = std::min(floor[f] + offset, lowest[f]);
   }
