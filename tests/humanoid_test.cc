@@ -229,6 +229,51 @@ TEST(PdControllerTest, StablePdModeAlsoHoldsAndBothModesParse) {
   mj_deleteData(d);
 }
 
+// --pd_gain_scale multiplies every servo's kp and kd, in the compiled model as in what
+// PdController reads, and a stiffer arm droops less under gravity.
+TEST(PdControllerTest, GainScaleStiffensEveryServo) {
+  const int elbow_hinge = 3 * (DefaultSpec().BodyIndex("L_Elbow") - 1) + 1;
+  auto droop = [&](double scale, std::shared_ptr<const HumanoidModel>* out) {
+    PhysicsOptions options;
+    options.fixed_root = true;
+    options.fixed_root_height = 2.5;
+    options.pd_gain_scale = scale;
+    auto humanoid = HumanoidModel::Create(DefaultSpec(), options);
+    EXPECT_TRUE(humanoid.ok()) << humanoid.status();
+    *out = *humanoid;
+    const mjModel* m = (*humanoid)->model();
+    mjData* d = mj_makeData(m);
+    PdController pd(**humanoid);
+    std::vector<double> targets(69, 0.0);
+    targets[3 * (DefaultSpec().BodyIndex("L_Shoulder") - 1) + 2] = -1.5;  // the arm held out sideways
+    for (int s = 0; s < 30; ++s) pd.Step(targets.data(), d);
+    double error = 0;
+    for (int h = 0; h < 69; ++h) error += std::abs(d->qpos[(*humanoid)->hinge_qpos_start() + h] - targets[h]);
+    mj_deleteData(d);
+    return error;
+  };
+  std::shared_ptr<const HumanoidModel> base, stiff;
+  const double base_droop = droop(1.0, &base);
+  const double stiff_droop = droop(2.0, &stiff);
+  for (int h = 0; h < 69; ++h) {
+    EXPECT_DOUBLE_EQ(stiff->kp()[h], 2 * base->kp()[h]) << h;
+    EXPECT_DOUBLE_EQ(stiff->kd()[h], 2 * base->kd()[h]) << h;
+    EXPECT_NEAR(stiff->model()->actuator_gainprm[h * mjNGAIN], 2 * base->model()->actuator_gainprm[h * mjNGAIN], 1e-6);
+  }
+  const int dof = stiff->hinge_qvel_start() + elbow_hinge;
+  EXPECT_NEAR(stiff->model()->dof_damping[dof], 2 * base->model()->dof_damping[dof], 1e-6);
+  EXPECT_GT(base_droop, 0.0);
+  EXPECT_LT(stiff_droop, 0.7 * base_droop);
+
+  for (double bad : {0.0, -1.0, 101.0, std::nan("")}) {
+    PhysicsOptions options;
+    options.pd_gain_scale = bad;
+    auto humanoid = HumanoidModel::Create(DefaultSpec(), options);
+    ASSERT_FALSE(humanoid.ok()) << bad;
+    EXPECT_NE(humanoid.status().message().find("pd_gain_scale"), std::string::npos) << humanoid.status();
+  }
+}
+
 // A family's torque limits (FamilyTorqueLimits: about 170 N*m at the knee) bound the whole PD
 // torque under stable PD, damping included. A position servo's damping is MuJoCo joint damping
 // outside the actuator's range: against a 170 N*m limit its kd 80 caps the knee's extension at

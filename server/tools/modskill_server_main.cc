@@ -4,6 +4,7 @@
 #include <signal.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -37,6 +38,9 @@ ABSL_FLAG(std::string, tls_cert, "", "PEM certificate chain (with --tls_key: ser
 ABSL_FLAG(std::string, tls_key, "", "PEM private key");
 ABSL_FLAG(std::string, pd_mode, "position_implicit",
           "position_implicit or stable_pd (motor-skill family sessions always run stable_pd)");
+ABSL_FLAG(double, pd_gain_scale, 1.0,
+          "multiplies every hinge's PD gains kp and kd (PHC's), in (0, 100]; a policy runs best at the gains it "
+          "was trained with");
 ABSL_FLAG(std::string, sampling, "failure_count",
           "how sessions pick clips from ReportFailures: failure_count (PHC: probability ~ recent failures), "
           "decay_on_success (ProtoMotions: weight x0.999 per success, 1 per failure), failure_rate "
@@ -107,6 +111,11 @@ absl::Status ReadNetworkAndCapacity(ServerOptions& options) {
   auto pd_mode = ParsePdMode(absl::GetFlag(FLAGS_pd_mode));
   if (!pd_mode.ok()) return Invalid(std::string(pd_mode.status().message()));
   options.service.physics.pd_mode = *pd_mode;
+  options.service.physics.pd_gain_scale = absl::GetFlag(FLAGS_pd_gain_scale);
+  const double gain_scale = options.service.physics.pd_gain_scale;
+  if (!(std::isfinite(gain_scale) && gain_scale > 0 && gain_scale <= 100)) {
+    return Invalid("--pd_gain_scale must be finite, in (0, 100]");
+  }
   return absl::OkStatus();
 }
 
@@ -161,10 +170,12 @@ absl::Status ReadAccess(ServiceOptions& service) {
 // The one line that says the server is up and how it is configured.
 void LogListening(const ServerOptions& options, int port, int num_clips, const std::string& motion_dir) {
   const GenerationOptions& generation = options.service.generation;
-  LogLine("modskill-server listening on %s:%d (%s%s), %d clips from %s, %d threads per session, %s sampling "
-          "(floor %g), generative resampling %s",
+  const PhysicsOptions& physics = options.service.physics;
+  LogLine("modskill-server listening on %s:%d (%s%s), %d clips from %s, %s PD at %g x PHC's gains, %d threads "
+          "per session, %s sampling (floor %g), generative resampling %s",
           options.bind, port, options.tls_cert_file.empty() ? "insecure" : "TLS",
           options.service.auth_token.empty() ? "" : ", token auth", num_clips, motion_dir,
+          std::string(PdModeName(physics.pd_mode)), physics.pd_gain_scale,
           options.service.threads_per_session, SamplingSchemeName(options.service.sampling),
           options.service.sampling_floor,
           !generation.enabled ? std::string("off")

@@ -20,6 +20,10 @@ absl::StatusOr<std::shared_ptr<const HumanoidModel>> HumanoidModel::Create(const
   if (options.substeps < 1 || options.substeps > 100) {
     return absl::InvalidArgumentError(absl::StrCat("substeps: ", options.substeps, " outside [1, 100]"));
   }
+  if (!(std::isfinite(options.pd_gain_scale) && options.pd_gain_scale > 0 && options.pd_gain_scale <= 100)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("pd_gain_scale: ", options.pd_gain_scale, " must be finite, in (0, 100]"));
+  }
   std::shared_ptr<HumanoidModel> humanoid(new HumanoidModel());
   humanoid->spec_ = spec;
   humanoid->options_ = options;
@@ -48,8 +52,8 @@ absl::StatusOr<std::shared_ptr<const HumanoidModel>> HumanoidModel::Create(const
       humanoid->action_offset_.push_back(0.5 * (low + high));
       // PHC: scale reaches a bit past the joint limits, capped at pi.
       humanoid->action_scale_.push_back(std::min(1.2 * 0.5 * (high - low), M_PI));
-      humanoid->kp_.push_back(body.kp);
-      humanoid->kd_.push_back(body.kd);
+      humanoid->kp_.push_back(options.pd_gain_scale * body.kp);
+      humanoid->kd_.push_back(options.pd_gain_scale * body.kd);
       humanoid->torque_limit_.push_back(body.torque_limit);
     }
   }

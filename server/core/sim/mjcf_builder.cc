@@ -42,7 +42,8 @@ void AppendBody(const HumanoidSpec& spec, const PhysicsOptions& options, int ind
     const char* axes[3] = {"0 1 0", "0 0 1", "1 0 0"};
     const char* suffix[3] = {"_x", "_y", "_z"};
     // Stable PD computes its own damping; the implicit mode lets MuJoCo integrate kd.
-    const double damping = options.pd_mode == PdMode::kPositionImplicitDamping ? body.kd : 0.0;
+    const double damping =
+        options.pd_mode == PdMode::kPositionImplicitDamping ? options.pd_gain_scale * body.kd : 0.0;
     for (int a = 0; a < 3; ++a) {
       absl::StrAppend(xml, indent,
                       absl::StrFormat("  <joint name=\"%s%s\" type=\"hinge\" axis=\"%s\" range=\"%.6f %.6f\" "
@@ -99,7 +100,8 @@ std::string BuildHumanoidMjcf(const HumanoidSpec& spec, const PhysicsOptions& op
         absl::StrAppend(&xml, absl::StrFormat("    <general name=\"%s%s\" joint=\"%s%s\" gaintype=\"fixed\" "
                                               "gainprm=\"%.3f\" biastype=\"affine\" biasprm=\"0 %.3f 0\" "
                                               "forcelimited=\"true\" forcerange=\"%.3f %.3f\"/>\n",
-                                              body.name, suffix, body.name, suffix, body.kp, -body.kp,
+                                              body.name, suffix, body.name, suffix, options.pd_gain_scale * body.kp,
+                                              -options.pd_gain_scale * body.kp,
                                               -body.torque_limit, body.torque_limit));
       }
     }

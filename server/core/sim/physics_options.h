@@ -25,6 +25,9 @@ struct PhysicsOptions {
   double control_hz = 30.0;
   int substeps = 4;  // physics at control_hz * substeps
   PdMode pd_mode = PdMode::kPositionImplicitDamping;
+  // Multiplies every hinge's kp and kd (the spec's, PHC's): stiffer servos sag less under the
+  // body's weight, so the reference pose alone lands closer to where the clip puts the body.
+  double pd_gain_scale = 1.0;
   bool self_collision = true;  // PHC collides every pair of bodies except parent and child
   bool fixed_root = false;     // weld the pelvis in the air (PD tests, visualization)
   double friction = 1.0;
