@@ -4,7 +4,6 @@
 #include <signal.h>
 
 #include <algorithm>
-#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -112,9 +111,9 @@ absl::Status ReadNetworkAndCapacity(ServerOptions& options) {
   if (!pd_mode.ok()) return Invalid(std::string(pd_mode.status().message()));
   options.service.physics.pd_mode = *pd_mode;
   options.service.physics.pd_gain_scale = absl::GetFlag(FLAGS_pd_gain_scale);
-  const double gain_scale = options.service.physics.pd_gain_scale;
-  if (!(std::isfinite(gain_scale) && gain_scale > 0 && gain_scale <= 100)) {
-    return Invalid("--pd_gain_scale must be finite, in (0, 100]");
+  if (absl::Status status = ValidatePdGainScale(options.service.physics.pd_gain_scale, "--pd_gain_scale");
+      !status.ok()) {
+    return Invalid(std::string(status.message()));
   }
   return absl::OkStatus();
 }

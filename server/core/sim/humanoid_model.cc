@@ -20,10 +20,7 @@ absl::StatusOr<std::shared_ptr<const HumanoidModel>> HumanoidModel::Create(const
   if (options.substeps < 1 || options.substeps > 100) {
     return absl::InvalidArgumentError(absl::StrCat("substeps: ", options.substeps, " outside [1, 100]"));
   }
-  if (!(std::isfinite(options.pd_gain_scale) && options.pd_gain_scale > 0 && options.pd_gain_scale <= 100)) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("pd_gain_scale: ", options.pd_gain_scale, " must be finite, in (0, 100]"));
-  }
+  if (absl::Status status = ValidatePdGainScale(options.pd_gain_scale, "pd_gain_scale"); !status.ok()) return status;
   std::shared_ptr<HumanoidModel> humanoid(new HumanoidModel());
   humanoid->spec_ = spec;
   humanoid->options_ = options;

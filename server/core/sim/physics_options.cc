@@ -1,5 +1,7 @@
 #include "server/core/sim/physics_options.h"
 
+#include <cmath>
+
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
 
@@ -20,6 +22,11 @@ absl::StatusOr<PdMode> ParsePdMode(absl::string_view name) {
   if (name == "stable_pd") return PdMode::kStablePd;
   return absl::InvalidArgumentError(
       absl::StrCat("pd_mode: unknown value '", name, "' (expected position_implicit or stable_pd)"));
+}
+
+absl::Status ValidatePdGainScale(double scale, absl::string_view what) {
+  if (std::isfinite(scale) && scale > 0 && scale <= 100) return absl::OkStatus();
+  return absl::InvalidArgumentError(absl::StrCat(what, ": ", scale, " must be finite, in (0, 100]"));
 }
 
 }  // namespace modskill
