@@ -174,7 +174,7 @@ void LogListening(const ServerOptions& options, int port, int num_clips, const s
           "per session, %s sampling (floor %g), generative resampling %s",
           options.bind, port, options.tls_cert_file.empty() ? "insecure" : "TLS",
           options.service.auth_token.empty() ? "" : ", token auth", num_clips, motion_dir,
-          std::string(PdModeName(physics.pd_mode)), physics.pd_gain_scale,
+          PdModeName(physics.pd_mode), physics.pd_gain_scale,
           options.service.threads_per_session, SamplingSchemeName(options.service.sampling),
           options.service.sampling_floor,
           !generation.enabled ? std::string("off")
