@@ -43,8 +43,11 @@ train_side_by_side "--no_generative $SERVER_FLAGS" --skills "$SKILLS" --iteratio
 for i in "${!NAMES[@]}"; do
   name="${NAMES[$i]}"
   task=$(sed -n 's/.*--task[ =]\([a-z_]*\).*/\1/p' <<< "${FLAGS[$i]}")
+  # The goals it trained on (speeds, intervals, reach's box) are the goals it is evaluated on.
+  goal_flags=$(grep -oE -- '--task_(min_speed|max_speed|min_goal_interval_s|max_goal_interval_s|reach_box_size|reach_center)[ =][^ ]+' \
+      <<< "${FLAGS[$i]}" | tr '\n' ' ' || true)
   "$BUILD/learner/modskill-learner" --eval --task "$task" --checkpoint "$OUT/$name/policy.pt" --skills "$SKILLS" \
-      --servers "127.0.0.1:${PORTS[$i]}" --task_baselines --eval_episodes "$EPISODES" --seed 7 \
+      --servers "127.0.0.1:${PORTS[$i]}" --task_baselines --eval_episodes "$EPISODES" --seed 7 $goal_flags \
       ${MOTIONS:+--motions "$MOTIONS"} --eval_out "$OUT/$name/eval" > "$OUT/$name/eval.log" 2>&1
   { echo "### $name"; cat "$OUT/$name/eval/eval.md"; echo; } 
 done | tee "$OUT/table.md"

@@ -134,11 +134,7 @@ ServerPoolOptions Trainer::PoolOptions() const {
   }
   if (!IsTrackingTask(config.task)) {
     pool.session.set_task(config.task);
-    v1::TaskSettings* settings = pool.session.mutable_task_settings();
-    settings->set_min_speed(static_cast<float>(config.task_min_speed));
-    settings->set_max_speed(static_cast<float>(config.task_max_speed));
-    settings->set_min_goal_interval_s(static_cast<float>(config.task_min_goal_interval_s));
-    settings->set_max_goal_interval_s(static_cast<float>(config.task_max_goal_interval_s));
+    WriteTaskSettings(config, pool.session.mutable_task_settings());
   }
   return pool;
 }

@@ -26,6 +26,32 @@ absl::Status ValidateWidths(absl::string_view flag, const std::vector<int64_t>& 
 
 // --task, --skills and the task's settings and sizes; the task's name is checked against the
 // server's list when the trainer starts.
+// The server's bounds on reach's box (TaskSettings in modskill.proto) on the box the flags make
+// with the server's defaults for what they leave out.
+absl::Status ValidateReachBox(const TrainerConfig& c) {
+  if (!(std::isfinite(c.task_reach_box_size) && c.task_reach_box_size >= 0 && c.task_reach_box_size <= 4)) {
+    return absl::InvalidArgumentError(absl::StrCat("--task_reach_box_size: ", c.task_reach_box_size,
+                                                   " must be in (0, 4] m (0: the server's 2 m)"));
+  }
+  if (!c.task_reach_center.empty() && c.task_reach_center.size() != 3) {
+    return absl::InvalidArgumentError(absl::StrCat("--task_reach_center: ", c.task_reach_center.size(),
+                                                   " values; it takes forward,left,height in m"));
+  }
+  const double half = 0.5 * (c.task_reach_box_size > 0 ? c.task_reach_box_size : 2.0);
+  const double center[3] = {c.task_reach_center.empty() ? 0.0 : c.task_reach_center[0],
+                            c.task_reach_center.empty() ? 0.0 : c.task_reach_center[1],
+                            c.task_reach_center.empty() ? 1.0 : c.task_reach_center[2]};
+  for (int axis = 0; axis < 3; ++axis) {
+    const double low = axis == 2 ? 0.0 : -3.0;
+    if (!(std::isfinite(center[axis]) && center[axis] - half >= low && center[axis] + half <= 3.0)) {
+      return absl::InvalidArgumentError(absl::StrCat("--task_reach_center: ", center[axis],
+                                                     " puts the reach box (half edge ", half, " m) outside [",
+                                                     low, ", 3] m on axis ", axis));
+    }
+  }
+  return absl::OkStatus();
+}
+
 absl::Status ValidateTask(const TrainerConfig& c) {
   if (c.task.empty()) return absl::InvalidArgumentError("--task: empty (tracking, or a task the server lists)");
   if (IsTrackingTask(c.task) != c.skills.empty()) {
@@ -86,7 +112,7 @@ absl::Status ValidateTask(const TrainerConfig& c) {
     return absl::InvalidArgumentError(absl::StrCat("--task_min_goal_interval_s: ", c.task_min_goal_interval_s,
                                                    " is above --task_max_goal_interval_s ", c.task_max_goal_interval_s));
   }
-  return absl::OkStatus();
+  return ValidateReachBox(c);
 }
 
 }  // namespace
@@ -227,6 +253,19 @@ absl::Status TrainerConfig::Validate() const {
 
 bool IsTrackingTask(const std::string& task) { return task == "tracking"; }
 
+void WriteTaskSettings(const TrainerConfig& config, v1::TaskSettings* settings) {
+  settings->set_min_speed(static_cast<float>(config.task_min_speed));
+  settings->set_max_speed(static_cast<float>(config.task_max_speed));
+  settings->set_min_goal_interval_s(static_cast<float>(config.task_min_goal_interval_s));
+  settings->set_max_goal_interval_s(static_cast<float>(config.task_max_goal_interval_s));
+  if (config.task_reach_box_size > 0) settings->set_reach_box_size(static_cast<float>(config.task_reach_box_size));
+  if (config.task_reach_center.size() == 3) {
+    settings->set_reach_center_x(static_cast<float>(config.task_reach_center[0]));
+    settings->set_reach_center_y(static_cast<float>(config.task_reach_center[1]));
+    settings->set_reach_center_z(static_cast<float>(config.task_reach_center[2]));
+  }
+}
+
 absl::Status CheckTaskOffered(const v1::EnvSpec& described, const std::string& task, const std::string& server) {
   std::vector<std::string> offered;
   for (const v1::TaskInfo& info : described.tasks()) {
@@ -311,6 +350,8 @@ std::string TrainerConfig::ToJson() const {
                              {"max_speed", task_max_speed},
                              {"min_goal_interval_s", task_min_goal_interval_s},
                              {"max_goal_interval_s", task_max_goal_interval_s}};
+    if (task_reach_box_size > 0) json["task_settings"]["reach_box_size"] = task_reach_box_size;
+    if (!task_reach_center.empty()) json["task_settings"]["reach_center"] = task_reach_center;
   }
   if (data_parallel.world_size > 1) {
     json["world_size"] = data_parallel.world_size;

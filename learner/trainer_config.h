@@ -91,6 +91,10 @@ struct TrainerConfig {
   bool anchor_reference = false;
   // SessionConfig.task_settings; 0 in a field: the server's default.
   double task_min_speed = 0, task_max_speed = 0, task_min_goal_interval_s = 0, task_max_goal_interval_s = 0;
+  // reach's target box: its edge (m; 0: the server's 2 m) and its centre, forward, left, height
+  // (empty: the server's (0, 0, 1)).
+  double task_reach_box_size = 0;
+  std::vector<double> task_reach_center;
 
   // What to learn with.
   ModelConfig model;
@@ -164,6 +168,9 @@ bool IsTrackingTask(const std::string& task);
 // INVALID_ARGUMENT naming --task and what `server` offers unless `described` (its Describe
 // answer) lists `task`.
 absl::Status CheckTaskOffered(const v1::EnvSpec& described, const std::string& task, const std::string& server);
+
+// The sessions' task settings from a validated config: each 0 or empty field left to the server.
+void WriteTaskSettings(const TrainerConfig& config, v1::TaskSettings* settings);
 
 // The action mode and the watched bodies of a validated config.
 ActionMode ActionModeOf(const TrainerConfig& config);

@@ -476,6 +476,11 @@ TEST(LearnerTrainingTest, BadConfigurationsAreClearErrors) {
       {[](TrainerConfig* c) { c->model.critic_hidden = {-3}; }, "--critic_hidden"},
       {[](TrainerConfig* c) { c->curriculum_start = 0.25, c->curriculum_end = 1.0; }, "--termination_curriculum"},
       {[&](TrainerConfig* c) { c->curriculum_start = nan, c->curriculum_end = 0.25; }, "--termination_curriculum"},
+      {[](TrainerConfig* c) { c->task_reach_box_size = 5; }, "--task_reach_box_size"},
+      {[&](TrainerConfig* c) { c->task_reach_box_size = nan; }, "--task_reach_box_size"},
+      {[](TrainerConfig* c) { c->task_reach_center = {0.3, 0.1}; }, "--task_reach_center"},
+      {[](TrainerConfig* c) { c->task_reach_center = {0, 0, 0.5}; }, "--task_reach_center"},  // 2 m box underground
+      {[](TrainerConfig* c) { c->task_reach_box_size = 3, c->task_reach_center = {2, 0, 1.5}; }, "--task_reach_center"},
       {[](TrainerConfig* c) {
          c->model.whole_body = true;
          c->model.controller_input = ModelConfig::ControllerInput::kProprioception;

@@ -253,6 +253,35 @@ TEST(ReachTaskTest, TargetsLieInTheBoxAndTheHandAtTheTargetEarnsOne) {
   EXPECT_NEAR(terms[0], std::exp(-5.0), 1e-7);
 }
 
+// A smaller box elsewhere (a curriculum's near targets, or a probe's one target) holds every
+// draw, and the draws fill it rather than sit at its centre.
+TEST(ReachTaskTest, TargetsFollowTheSettingsBox) {
+  GoalTaskContext context;
+  context.control_dt = 1.0 / 30;
+  context.right_hand = DefaultSpec().BodyIndex("R_Hand");
+  context.settings.reach_box_size = 0.4;
+  context.settings.reach_center[0] = 0.5;
+  context.settings.reach_center[1] = -0.3;
+  context.settings.reach_center[2] = 1.2;
+  ReachTask reach(&context);
+  std::mt19937_64 rng(5);
+  const HumanoidState state = StandingState();
+  const Quat to_heading = InverseHeadingRotation(state.body_rot[0]);
+  Vec3 low = Vec3::Constant(1e9), high = Vec3::Constant(-1e9);
+  for (int draw = 0; draw < 200; ++draw) {
+    reach.Reset(state, nullptr, rng);
+    const Vec3 local = to_heading * (reach.target() - Vec3(state.body_pos[0].x(), state.body_pos[0].y(), 0));
+    low = low.cwiseMin(local);
+    high = high.cwiseMax(local);
+  }
+  const Vec3 center(0.5, -0.3, 1.2);
+  for (int axis = 0; axis < 3; ++axis) {
+    EXPECT_GE(low[axis], center[axis] - 0.2 - 1e-9) << axis;
+    EXPECT_LE(high[axis], center[axis] + 0.2 + 1e-9) << axis;
+    EXPECT_GT(high[axis] - low[axis], 0.3) << axis;
+  }
+}
+
 // The strike target stands in front at rest, scores 0 standing and 1 lying, and fails the
 // episode when a body it does not allow touches it.
 TEST(StrikeTaskTest, TargetStandsInFrontAndOnlyTheRightArmMayTouchIt) {
@@ -445,14 +474,22 @@ TEST(TaskSettingsTest, OutOfRangeSettingsNameTheField) {
     TaskSettings settings;
     const char* field;
   };
-  TaskSettings speed, inverted, interval, long_interval, nan;
+  TaskSettings speed, inverted, interval, long_interval, nan, no_box, huge_box, underground, far, nan_center;
   speed.min_speed = -1;
   inverted.max_speed = 0.1;
   interval.min_goal_interval_s = 0;
   long_interval.max_goal_interval_s = 4000;
   nan.max_speed = std::nan("");
-  for (const Case& c : {Case{speed, "min_speed"}, Case{inverted, "max_speed"}, Case{interval, "min_goal_interval_s"},
-                        Case{long_interval, "max_goal_interval_s"}, Case{nan, "max_speed"}}) {
+  no_box.reach_box_size = 0;
+  huge_box.reach_box_size = 5;
+  underground.reach_center[2] = 0.5;  // the 2 m box would reach 0.5 m below the floor
+  far.reach_center[0] = 2.5;
+  nan_center.reach_center[1] = std::nan("");
+  for (const Case& c :
+       {Case{speed, "min_speed"}, Case{inverted, "max_speed"}, Case{interval, "min_goal_interval_s"},
+        Case{long_interval, "max_goal_interval_s"}, Case{nan, "max_speed"}, Case{no_box, "reach_box_size"},
+        Case{huge_box, "reach_box_size"}, Case{underground, "reach_center_z"}, Case{far, "reach_center_x"},
+        Case{nan_center, "reach_center_y"}}) {
     const absl::Status status = c.settings.Validate();
     EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument) << c.field;
     EXPECT_NE(status.message().find(c.field), std::string::npos) << status;

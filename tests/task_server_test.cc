@@ -113,6 +113,14 @@ TEST_F(SimulationServerTest, BadTasksAreRejectedNamingTheField) {
   config.mutable_task_settings()->set_max_goal_interval_s(std::nanf(""));
   cases.push_back({config, "task_settings.max_goal_interval_s"});
   config = Config(2);
+  config.set_task("reach");
+  config.mutable_task_settings()->set_reach_box_size(0.f);  // set, so not the default
+  cases.push_back({config, "task_settings.reach_box_size"});
+  config = Config(2);
+  config.set_task("reach");
+  config.mutable_task_settings()->set_reach_center_z(0.f);  // half the default box underground
+  cases.push_back({config, "task_settings.reach_center_z"});
+  config = Config(2);
   config.set_task("steer");
   config.set_loop_clips(true);
   cases.push_back({config, "loop_clips: tracking only"});

@@ -105,6 +105,9 @@ ABSL_FLAG(double, task_min_speed, 0, "steer: lowest target speed, m/s (0: the se
 ABSL_FLAG(double, task_max_speed, 0, "steer: highest target speed, m/s (0: the server's default, 3)");
 ABSL_FLAG(double, task_min_goal_interval_s, 0, "steer, reach: shortest time between goals, s (0: default 2)");
 ABSL_FLAG(double, task_max_goal_interval_s, 0, "steer, reach: longest time between goals, s (0: default 5)");
+ABSL_FLAG(double, task_reach_box_size, 0, "reach: edge of the box targets are drawn in, m (0: the paper's 2)");
+ABSL_FLAG(std::vector<std::string>, task_reach_center, {},
+          "reach: the box's centre in the heading frame, forward,left,height in m (default: the paper's 0,0,1)");
 ABSL_FLAG(bool, task_baselines, false,
           "--eval --task: also drive the skills with a random unit z per part each step and with the task "
           "policy's mean z");
@@ -278,6 +281,25 @@ int RunEvaluation(const std::string& token) {
 }
 
 // A task policy and, with --task_baselines, the same skills under random and constant z.
+// --task_min_speed ... --task_reach_center: the goal tasks' settings.
+absl::Status TaskSettingsFromFlags(TrainerConfig* config) {
+  config->task_min_speed = absl::GetFlag(FLAGS_task_min_speed);
+  config->task_max_speed = absl::GetFlag(FLAGS_task_max_speed);
+  config->task_min_goal_interval_s = absl::GetFlag(FLAGS_task_min_goal_interval_s);
+  config->task_max_goal_interval_s = absl::GetFlag(FLAGS_task_max_goal_interval_s);
+  config->task_reach_box_size = absl::GetFlag(FLAGS_task_reach_box_size);
+  config->task_reach_center.clear();
+  for (const std::string& text : absl::GetFlag(FLAGS_task_reach_center)) {
+    double value = 0;
+    if (!absl::SimpleAtod(text, &value) || !std::isfinite(value)) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("--task_reach_center: '", text.substr(0, 32), "' is not a finite number of metres"));
+    }
+    config->task_reach_center.push_back(value);
+  }
+  return absl::OkStatus();
+}
+
 absl::StatusOr<TaskEvaluationReport> EvaluateTaskFromFlags(SimulationClient& client, const std::string& checkpoint) {
   const std::string task = absl::GetFlag(FLAGS_task);
   auto file = ReadExportedPolicy(checkpoint);
@@ -288,11 +310,9 @@ absl::StatusOr<TaskEvaluationReport> EvaluateTaskFromFlags(SimulationClient& cli
   TaskEvaluationOptions options;
   options.session.set_part_layout(file->spec.part_layout);
   options.session.set_task(task);
-  v1::TaskSettings* settings = options.session.mutable_task_settings();
-  settings->set_min_speed(static_cast<float>(absl::GetFlag(FLAGS_task_min_speed)));
-  settings->set_max_speed(static_cast<float>(absl::GetFlag(FLAGS_task_max_speed)));
-  settings->set_min_goal_interval_s(static_cast<float>(absl::GetFlag(FLAGS_task_min_goal_interval_s)));
-  settings->set_max_goal_interval_s(static_cast<float>(absl::GetFlag(FLAGS_task_max_goal_interval_s)));
+  TrainerConfig goals;
+  if (absl::Status status = TaskSettingsFromFlags(&goals); !status.ok()) return status;
+  WriteTaskSettings(goals, options.session.mutable_task_settings());
   options.session.set_action_mode(ToWire(file->spec.action.mode));
   if (file->spec.action.mode == ActionMode::kResidual) {
     options.session.set_residual_scale(static_cast<float>(file->spec.action.residual_scale));
@@ -384,11 +404,7 @@ absl::Status TaskFromFlags(TrainerConfig* config) {
       !status.ok()) {
     return status;
   }
-  config->task_min_speed = absl::GetFlag(FLAGS_task_min_speed);
-  config->task_max_speed = absl::GetFlag(FLAGS_task_max_speed);
-  config->task_min_goal_interval_s = absl::GetFlag(FLAGS_task_min_goal_interval_s);
-  config->task_max_goal_interval_s = absl::GetFlag(FLAGS_task_max_goal_interval_s);
-  return absl::OkStatus();
+  return TaskSettingsFromFlags(config);
 }
 
 // The trainer's configuration from --preset and the flags that override it; every error is a

@@ -60,6 +60,10 @@ absl::StatusOr<TaskSettings> ToTaskSettings(const v1::TaskSettings& wire) {
   if (wire.max_speed() != 0) settings.max_speed = wire.max_speed();
   if (wire.min_goal_interval_s() != 0) settings.min_goal_interval_s = wire.min_goal_interval_s();
   if (wire.max_goal_interval_s() != 0) settings.max_goal_interval_s = wire.max_goal_interval_s();
+  if (wire.has_reach_box_size()) settings.reach_box_size = wire.reach_box_size();
+  if (wire.has_reach_center_x()) settings.reach_center[0] = wire.reach_center_x();
+  if (wire.has_reach_center_y()) settings.reach_center[1] = wire.reach_center_y();
+  if (wire.has_reach_center_z()) settings.reach_center[2] = wire.reach_center_z();
   if (absl::Status status = settings.Validate(); !status.ok()) return status;
   return settings;
 }

@@ -41,7 +41,8 @@ absl::StatusOr<PartLayout> FindLayout(const PartLayoutCatalog& layouts, const st
 absl::StatusOr<TerminationMode> ToTermination(v1::TerminationMode mode, v1::TerminationMode default_mode);
 // 0 means the mode's default (0.5 m in evaluation, 0.25 m otherwise).
 absl::StatusOr<double> ToTerminationDistance(float distance, TerminationMode mode);
-// 0 in a field means its default; then TaskSettings::Validate.
+// 0 in a speed or interval field means its default, an unset reach_* field too; then
+// TaskSettings::Validate.
 absl::StatusOr<TaskSettings> ToTaskSettings(const v1::TaskSettings& wire);
 // A family session's ranges (empty when SessionConfig.family is unset): offered parameters, valid
 // ranges, one clip, task tracking, residual actions, no loop_clips; INVALID_ARGUMENT naming the

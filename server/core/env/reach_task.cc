@@ -5,8 +5,11 @@
 namespace modskill {
 
 void ReachTask::DrawGoal(const HumanoidState& sim, std::mt19937_64& rng) {
-  std::uniform_real_distribution<double> unit(-1.0, 1.0);
-  const double x = unit(rng), y = unit(rng), z = 1.0 + unit(rng);
+  const TaskSettings& settings = context_->settings;
+  const double half = 0.5 * settings.reach_box_size;
+  std::uniform_real_distribution<double> unit(-half, half);
+  const double x = settings.reach_center[0] + unit(rng), y = settings.reach_center[1] + unit(rng),
+               z = settings.reach_center[2] + unit(rng);
   // The box is centred in the heading frame on the root's ground point; z is height above ground.
   Vec3 ground = sim.body_pos[0];
   ground.z() = 0;

@@ -1,5 +1,6 @@
 // Reach (ModSkill Table 4): bring the right hand to a target point drawn in a 2 m box centred at
-// (0, 0, 1) m in the heading frame; a new point at random intervals.
+// (0, 0, 1) m in the heading frame (TaskSettings may move and shrink the box); a new point at
+// random intervals.
 #ifndef MODSKILL_SERVER_CORE_ENV_REACH_TASK_H_
 #define MODSKILL_SERVER_CORE_ENV_REACH_TASK_H_
 

@@ -17,7 +17,8 @@ const std::vector<TaskInfo>& AllTasks() {
        "goal = target direction (heading frame, x y) and speed (m/s); r = 0.7 exp(-0.25 ((v* - d.v)^2 + "
        "0.1 |v_tangential|^2)) + 0.3 max(0, facing.d)"},
       {TaskKind::kReach, "reach", 3, {"reach", "energy"},
-       "goal = target point minus the root (heading frame, m), sampled in a 2 m box around (0, 0, 1); "
+       "goal = target point minus the root (heading frame, m), sampled in a 2 m box around (0, 0, 1) "
+       "(task_settings.reach_box_size, reach_center_*); "
        "r = exp(-5 |p_R_Hand - c|^2)"},
       {TaskKind::kStrike, "strike", 15, {"strike", "approach", "energy"},
        "goal = the target pillar's position (relative to the root), rotation, linear and angular velocity "
@@ -73,6 +74,21 @@ absl::Status TaskSettings::Validate() const {
     return absl::InvalidArgumentError(absl::StrCat("task_settings.max_goal_interval_s: ", max_goal_interval_s,
                                                    " outside [min_goal_interval_s = ", min_goal_interval_s,
                                                    ", 3600] s"));
+  }
+  if (!std::isfinite(reach_box_size) || reach_box_size <= 0 || reach_box_size > 4) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("task_settings.reach_box_size: ", reach_box_size, " outside (0, 4] m"));
+  }
+  const double half = 0.5 * reach_box_size;
+  constexpr const char* kCenterFields[3] = {"reach_center_x", "reach_center_y", "reach_center_z"};
+  for (int axis = 0; axis < 3; ++axis) {
+    const double low = axis == 2 ? 0.0 : -3.0;
+    const double c = reach_center[axis];
+    if (!std::isfinite(c) || c - half < low || c + half > 3.0) {
+      return absl::InvalidArgumentError(absl::StrCat("task_settings.", kCenterFields[axis], ": ", c,
+                                                     " puts the reach box (edge ", reach_box_size,
+                                                     " m) outside [", low, ", 3] m"));
+    }
   }
   return absl::OkStatus();
 }

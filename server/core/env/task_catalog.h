@@ -53,8 +53,13 @@ struct TaskSettings {
   double max_speed = 3.0;
   double min_goal_interval_s = 2.0;  // steer, reach: a new goal after U(min, max) seconds
   double max_goal_interval_s = 5.0;
+  // reach: targets are drawn uniformly in a box of this edge (m) centred at reach_center
+  // (heading frame on the root's ground point: forward, left, height). The paper's: 2 m at (0, 0, 1).
+  double reach_box_size = 2.0;
+  double reach_center[3] = {0.0, 0.0, 1.0};
   // INVALID_ARGUMENT naming the field: speeds finite with 0 <= min <= max <= 10, intervals
-  // finite with 0 < min <= max <= 3600.
+  // finite with 0 < min <= max <= 3600, the reach box's edge in (0, 4] and the box within 3 m of
+  // the root horizontally and between 0 and 3 m high.
   absl::Status Validate() const;
 };
 
