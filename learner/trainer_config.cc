@@ -24,8 +24,6 @@ absl::Status ValidateWidths(absl::string_view flag, const std::vector<int64_t>& 
   return absl::OkStatus();
 }
 
-// --task, --skills and the task's settings and sizes; the task's name is checked against the
-// server's list when the trainer starts.
 // The server's bounds on reach's box (TaskSettings in modskill.proto) on the box the flags make
 // with the server's defaults for what they leave out.
 absl::Status ValidateReachBox(const TrainerConfig& c) {
@@ -38,9 +36,8 @@ absl::Status ValidateReachBox(const TrainerConfig& c) {
                                                    " values; it takes forward,left,height in m"));
   }
   const double half = 0.5 * (c.task_reach_box_size > 0 ? c.task_reach_box_size : 2.0);
-  const double center[3] = {c.task_reach_center.empty() ? 0.0 : c.task_reach_center[0],
-                            c.task_reach_center.empty() ? 0.0 : c.task_reach_center[1],
-                            c.task_reach_center.empty() ? 1.0 : c.task_reach_center[2]};
+  const std::vector<double> center =
+      c.task_reach_center.empty() ? std::vector<double>{0.0, 0.0, 1.0} : c.task_reach_center;
   for (int axis = 0; axis < 3; ++axis) {
     const double low = axis == 2 ? 0.0 : -3.0;
     if (!(std::isfinite(center[axis]) && center[axis] - half >= low && center[axis] + half <= 3.0)) {
@@ -52,6 +49,8 @@ absl::Status ValidateReachBox(const TrainerConfig& c) {
   return absl::OkStatus();
 }
 
+// --task, --skills and the task's settings and sizes; the task's name is checked against the
+// server's list when the trainer starts.
 absl::Status ValidateTask(const TrainerConfig& c) {
   if (c.task.empty()) return absl::InvalidArgumentError("--task: empty (tracking, or a task the server lists)");
   if (IsTrackingTask(c.task) != c.skills.empty()) {

@@ -280,7 +280,6 @@ int RunEvaluation(const std::string& token) {
   return 0;
 }
 
-// A task policy and, with --task_baselines, the same skills under random and constant z.
 // --task_min_speed ... --task_reach_center: the goal tasks' settings.
 absl::Status TaskSettingsFromFlags(TrainerConfig* config) {
   config->task_min_speed = absl::GetFlag(FLAGS_task_min_speed);
@@ -300,6 +299,7 @@ absl::Status TaskSettingsFromFlags(TrainerConfig* config) {
   return absl::OkStatus();
 }
 
+// A task policy and, with --task_baselines, the same skills under random and constant z.
 absl::StatusOr<TaskEvaluationReport> EvaluateTaskFromFlags(SimulationClient& client, const std::string& checkpoint) {
   const std::string task = absl::GetFlag(FLAGS_task);
   auto file = ReadExportedPolicy(checkpoint);
