@@ -168,7 +168,10 @@ absl::Status Trainer::ChooseAmpFrames() {
   // checkpoints from before the flag (the whole history) and from a preset with fewer frames resume.
   if (config_.resume && !config_.amp_frames_given && writes_run_dir() && !data_parallel_ &&
       layout_.amp_obs_per_frame > 0) {
-    const absl::StatusOr<int64_t> stored = CheckpointAmpObsSize(config_.run_dir + "/checkpoint.pt");
+    const std::string path = config_.run_dir + "/checkpoint.pt";
+    auto bytes = ReadFileToString(path, kMaxCheckpointBytes);
+    if (bytes.ok()) resume_bytes_ = *std::move(bytes);  // LoadCheckpoint reports a file it cannot read
+    const absl::StatusOr<int64_t> stored = CheckpointAmpObsSize(resume_bytes_, path);
     if (stored.ok() && *stored % layout_.amp_obs_per_frame == 0) {
       config_.model.amp_frames = *stored / layout_.amp_obs_per_frame;
     }

@@ -65,8 +65,13 @@ struct IterationStats {
   int64_t allreduce_bytes = 0;
 };
 
-// The AMP observation size a trainer checkpoint's discriminator was trained on.
-absl::StatusOr<int64_t> CheckpointAmpObsSize(const std::string& path);
+// The largest trainer checkpoint a resume reads (the paper preset's networks with Adam's moments
+// are a few hundred MB).
+inline constexpr size_t kMaxCheckpointBytes = size_t{4} << 30;
+
+// The AMP observation size a trainer checkpoint's discriminator was trained on, from the
+// checkpoint's bytes (`origin` names them in errors).
+absl::StatusOr<int64_t> CheckpointAmpObsSize(const std::string& checkpoint_bytes, const std::string& origin);
 
 class Trainer {
  public:
@@ -98,6 +103,7 @@ class Trainer {
 
   // Full training state (networks, optimizers, normalizers, counters), written atomically.
   absl::Status SaveCheckpoint(const std::string& path);
+  // Reads `path`, or takes the bytes ChooseAmpFrames already read from it.
   absl::Status LoadCheckpoint(const std::string& path);
   // The same state as bytes, and restored from bytes (`origin` names them in errors).
   absl::StatusOr<std::string> SerializeState();
@@ -203,6 +209,7 @@ class Trainer {
   std::optional<SkillLibrary> skills_;
   v1::EnvSpec tracking_spec_;
   std::optional<TaskReturn> task_return_;
+  std::string resume_bytes_;  // the checkpoint a resume starts from, read once for ChooseAmpFrames and LoadCheckpoint
   ModSkillPolicy policy_{nullptr};
   Critic critic_{nullptr};
   AmpDiscriminator discriminator_{nullptr};
@@ -225,7 +232,8 @@ class Trainer {
   torch::Generator acting_generator_;  // action noise (the collection's thread)
   HeldNoise held_noise_;               // that noise, held per env (--noise_hold_steps)
   // PpoSettings::sampled_dims: with --frozen_parts_act_on_mean, 1 over the retrained parts' actions
-  // and 0 over the frozen parts'; undefined otherwise (every action is sampled).
+  // and 0 over the frozen parts'; with --task_parts, 1 over those parts' z (task_parts.h);
+  // undefined otherwise (every dim is sampled).
   torch::Tensor sampled_dims_;
   int64_t policy_version_ = 0;         // policy updates so far
   ActingNetworks snapshot_;            // the weights a collection during the update acts with

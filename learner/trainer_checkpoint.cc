@@ -59,19 +59,17 @@ absl::StatusOr<std::string> Trainer::SerializeState() {
   }
 }
 
-absl::StatusOr<int64_t> CheckpointAmpObsSize(const std::string& path) {
-  auto bytes = ReadFileToString(path, size_t{4} << 30);
-  if (!bytes.ok()) return bytes.status();
+absl::StatusOr<int64_t> CheckpointAmpObsSize(const std::string& checkpoint_bytes, const std::string& origin) {
   try {
     torch::serialize::InputArchive archive;
-    std::istringstream in(*bytes, std::ios::binary);
+    std::istringstream in(checkpoint_bytes, std::ios::binary);
     archive.load_from(in);
     torch::Tensor amp_obs_size;
     archive.read("amp_obs_size", amp_obs_size);
     return amp_obs_size.item<int64_t>();
   } catch (const std::exception& e) {
     std::string message = e.what();
-    return absl::InvalidArgumentError(absl::StrCat(path, ": ", message.substr(0, message.find('\n'))));
+    return absl::InvalidArgumentError(absl::StrCat(origin, ": ", message.substr(0, message.find('\n'))));
   }
 }
 
@@ -116,9 +114,14 @@ absl::Status CheckStoredWidths(torch::serialize::InputArchive& archive, const Mo
 }  // namespace
 
 absl::Status Trainer::LoadCheckpoint(const std::string& path) {
-  auto bytes = ReadFileToString(path, size_t{4} << 30);
-  if (!bytes.ok()) return bytes.status();
-  return RestoreState(*bytes, path);
+  if (resume_bytes_.empty()) {
+    auto bytes = ReadFileToString(path, kMaxCheckpointBytes);
+    if (!bytes.ok()) return bytes.status();
+    resume_bytes_ = *std::move(bytes);
+  }
+  const absl::Status restored = RestoreState(resume_bytes_, path);
+  resume_bytes_ = std::string();  // a checkpoint is megabytes; the run does not need it again
+  return restored;
 }
 
 absl::Status Trainer::RestoreState(const std::string& bytes, const std::string& path) {

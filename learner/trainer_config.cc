@@ -2,15 +2,16 @@
 
 #include <algorithm>
 #include <cmath>
-#include <tuple>
 #include <utility>
 
 #include <nlohmann/json.hpp>
 
-#include "absl/strings/str_cat.h"
+#include "absl/strings/match.h"
 #include "absl/strings/numbers.h"
+#include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
 #include "absl/strings/str_split.h"
+#include "common/task_settings.h"
 #include "learner/server_discovery.h"
 
 namespace modskill::learner {
@@ -24,29 +25,25 @@ absl::Status ValidateWidths(absl::string_view flag, const std::vector<int64_t>& 
   return absl::OkStatus();
 }
 
-// The server's bounds on reach's box (TaskSettings in modskill.proto) on the box the flags make
-// with the server's defaults for what they leave out.
-absl::Status ValidateReachBox(const TrainerConfig& c) {
-  if (!(std::isfinite(c.task_reach_box_size) && c.task_reach_box_size >= 0 && c.task_reach_box_size <= 4)) {
-    return absl::InvalidArgumentError(absl::StrCat("--task_reach_box_size: ", c.task_reach_box_size,
-                                                   " must be in (0, 4] m (0: the server's 2 m)"));
-  }
+// The settings the server will use: the flags', the server's defaults where a flag is 0 (unset),
+// checked against the server's own bounds (TaskSettings::Validate) under the flags' names.
+absl::Status ValidateTaskSettings(const TrainerConfig& c) {
   if (!c.task_reach_center.empty() && c.task_reach_center.size() != 3) {
     return absl::InvalidArgumentError(absl::StrCat("--task_reach_center: ", c.task_reach_center.size(),
                                                    " values; it takes forward,left,height in m"));
   }
-  const double half = 0.5 * (c.task_reach_box_size > 0 ? c.task_reach_box_size : 2.0);
-  const std::vector<double> center =
-      c.task_reach_center.empty() ? std::vector<double>{0.0, 0.0, 1.0} : c.task_reach_center;
-  for (int axis = 0; axis < 3; ++axis) {
-    const double low = axis == 2 ? 0.0 : -3.0;
-    if (!(std::isfinite(center[axis]) && center[axis] - half >= low && center[axis] + half <= 3.0)) {
-      return absl::InvalidArgumentError(absl::StrCat("--task_reach_center: ", center[axis],
-                                                     " puts the reach box (half edge ", half, " m) outside [",
-                                                     low, ", 3] m on axis ", axis));
-    }
+  TaskSettings settings;
+  for (const auto& [flag, field] : {std::pair<double, double*>{c.task_min_speed, &settings.min_speed},
+                                    {c.task_max_speed, &settings.max_speed},
+                                    {c.task_min_goal_interval_s, &settings.min_goal_interval_s},
+                                    {c.task_max_goal_interval_s, &settings.max_goal_interval_s},
+                                    {c.task_reach_box_size, &settings.reach_box_size}}) {
+    if (flag != 0) *field = flag;  // NaN too: Validate names it
   }
-  return absl::OkStatus();
+  for (size_t axis = 0; axis < c.task_reach_center.size(); ++axis) settings.reach_center[axis] = c.task_reach_center[axis];
+  return settings.Validate([](absl::string_view field) {
+    return absl::StartsWith(field, "reach_center") ? std::string("--task_reach_center") : absl::StrCat("--task_", field);
+  });
 }
 
 // --task, --skills and the task's settings and sizes; the task's name is checked against the
@@ -91,27 +88,14 @@ absl::Status ValidateTask(const TrainerConfig& c) {
     return absl::InvalidArgumentError(absl::StrCat("--task_log_std: ", c.model.task_log_std, " must be in (-20, 2)"));
   }
   if (absl::Status status = ValidateWidths("--task_hidden", c.model.task_hidden); !status.ok()) return status;
-  // The server's bounds (TaskSettings in modskill.proto), checked here too: a session the
-  // server refuses would only be retried until --server_timeout_s.
-  for (const auto& [flag, value, limit] :
-       {std::tuple<const char*, double, double>{"task_min_speed", c.task_min_speed, 10},
-        {"task_max_speed", c.task_max_speed, 10},
-        {"task_min_goal_interval_s", c.task_min_goal_interval_s, 3600},
-        {"task_max_goal_interval_s", c.task_max_goal_interval_s, 3600}}) {
-    if (!(value >= 0 && value <= limit)) {
-      return absl::InvalidArgumentError(
-          absl::StrCat("--", flag, ": ", value, " must be in [0, ", limit, "] (0: the server's default)"));
-    }
+  if (!c.task_parts.empty() && IsTrackingTask(c.task)) {
+    return absl::InvalidArgumentError("--task_parts: only with a --task (the parts whose z the task head displaces)");
   }
-  if (c.task_max_speed > 0 && c.task_min_speed > c.task_max_speed) {
+  if (!c.task_parts.empty() && !c.model.task_skill_prior) {
     return absl::InvalidArgumentError(
-        absl::StrCat("--task_min_speed: ", c.task_min_speed, " is above --task_max_speed ", c.task_max_speed));
+        "--task_parts: needs --task_skill_prior (the parts left out play the prior's z; without it they have none)");
   }
-  if (c.task_max_goal_interval_s > 0 && c.task_min_goal_interval_s > c.task_max_goal_interval_s) {
-    return absl::InvalidArgumentError(absl::StrCat("--task_min_goal_interval_s: ", c.task_min_goal_interval_s,
-                                                   " is above --task_max_goal_interval_s ", c.task_max_goal_interval_s));
-  }
-  return ValidateReachBox(c);
+  return ValidateTaskSettings(c);
 }
 
 }  // namespace
@@ -345,6 +329,7 @@ std::string TrainerConfig::ToJson() const {
     json["task_hidden"] = model.task_hidden;
     json["task_log_std"] = model.task_log_std;
     json["task_skill_prior"] = model.task_skill_prior;
+    if (!task_parts.empty()) json["task_parts"] = task_parts;
     json["task_settings"] = {{"min_speed", task_min_speed},
                              {"max_speed", task_max_speed},
                              {"min_goal_interval_s", task_min_goal_interval_s},

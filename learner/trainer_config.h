@@ -95,6 +95,10 @@ struct TrainerConfig {
   // (empty: the server's (0, 0, 1)).
   double task_reach_box_size = 0;
   std::vector<double> task_reach_center;
+  // The parts whose z the task head displaces (e.g. R_Arm for reach); the others play the skill
+  // prior's z exactly, without exploration noise, and leave PPO's ratios. Empty: every part (the
+  // paper's high level). Needs the skill prior (a part without a head has no other z).
+  std::vector<std::string> task_parts;
 
   // What to learn with.
   ModelConfig model;

@@ -42,6 +42,7 @@ std::vector<SharedSetting> SharedSettings(const TrainerConfig& c) {
       {"task_hidden", Text(m.task_hidden)},
       {"task_log_std", Text(m.task_log_std)},
       {"task_skill_prior", Text(m.task_skill_prior)},
+      {"task_parts", absl::StrJoin(c.task_parts, ",")},
       {"action_mode", c.action_mode},
       {"residual_scale", Text(c.residual_scale)},
       {"termination_distance", Text(c.termination_distance)},

@@ -8,6 +8,7 @@
 #include "absl/time/clock.h"
 #include "common/log.h"
 #include "learner/server_discovery.h"
+#include "learner/task_parts.h"
 #include "learner/trainer.h"
 #include "learner/trainer_phases.h"
 
@@ -58,13 +59,19 @@ absl::Status Trainer::PrepareTask() {
 absl::Status Trainer::LoadSkills() {
   if (absl::Status status = skills_->LoadControllers(*policy_); !status.ok()) return status;
   if (absl::Status status = skills_->LoadSelfStatistics(tracking_spec_, spec_, *obs_norm_); !status.ok()) return status;
+  if (!config_.task_parts.empty()) {
+    auto mask = RestrictTaskHeadToParts(*policy_, config_.task_parts, config_.part_layout);
+    if (!mask.ok()) return mask.status();
+    sampled_dims_ = *std::move(mask);
+  }
   task_return_.emplace(std::vector<std::string>(spec_.reward_terms().begin(), spec_.reward_terms().end()),
                        /*max_episode_steps=*/0);
-  LogLine("task %s: %d frozen part controllers from %s (z of %d, %s actions); task head %s, %s", config_.task,
+  LogLine("task %s: %d frozen part controllers from %s (z of %d, %s actions); task head %s, %s%s", config_.task,
           static_cast<int>(skills_->num_parts()), skills_->path(), static_cast<int>(skills_->embed_dim()),
           config_.action_mode, absl::StrJoin(config_.model.task_hidden, "x"),
           policy_->uses_skill_prior() ? "displacing the tracker's z on the base motion (skill prior)"
-                                      : "z from the head alone");
+                                      : "z from the head alone",
+          config_.task_parts.empty() ? "" : absl::StrCat(" of ", absl::StrJoin(config_.task_parts, ","), " only"));
   return absl::OkStatus();
 }
 

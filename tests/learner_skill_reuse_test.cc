@@ -26,6 +26,7 @@
 #include "learner/running_mean_std.h"
 #include "learner/skill_library.h"
 #include "learner/task_evaluation.h"
+#include "learner/task_parts.h"
 #include "learner/task_return.h"
 #include "server/core/env/env_spec.h"
 #include "server/core/env/policy_fit.h"
@@ -320,6 +321,62 @@ TEST(SkillReuseTest, PpoUpdatesTrainTheTaskHeadAndLeaveTheSkillsFrozen) {
   EXPECT_TRUE(AllEqual(attention_before, policy.attention()->parameters())) << "the prior moved";
   EXPECT_TRUE(Skills().CheckSameControllers(policy).ok());
   EXPECT_FALSE(AllEqual(head_before, policy.task_head()->parameters())) << "the task head did not learn";
+}
+
+// --task_parts R_Arm: the head displaces the right arm's z only; every other part plays the
+// prior's z exactly, before and after PPO updates that sample with the returned mask.
+TEST(SkillReuseTest, TaskPartsLeaveTheOtherPartsOnThePrior) {
+  torch::manual_seed(8);
+  TaskNetworks steer = SteerNetworks();
+  ModSkillPolicyImpl& policy = *steer.policy;
+  auto mask = RestrictTaskHeadToParts(policy, {"R_Arm"}, "5part");
+  ASSERT_TRUE(mask.ok()) << mask.status();
+  constexpr int64_t kArm = 4, kEmbed = 32;  // R_Arm is the 5part layout's fifth part
+  EXPECT_EQ(mask->sum().item<double>(), kEmbed);
+  EXPECT_EQ(mask->slice(0, kArm * kEmbed, (kArm + 1) * kEmbed).sum().item<double>(), kEmbed);
+  Critic critic(kSteerObs, SmallConfig().critic_hidden);
+  torch::optim::Adam optimizer(TrainableParameters(policy, *critic), torch::optim::AdamOptions(1e-3));
+  PpoSettings settings;
+  settings.minibatch_size = 64;
+  settings.sampled_dims = *mask;
+  torch::Generator generator = at::detail::createCPUGenerator(8);
+  const std::vector<torch::Tensor> head_before = Clones(policy.task_head()->parameters());
+  for (int iteration = 0; iteration < 3; ++iteration) {
+    PpoBatch batch;
+    batch.obs = torch::randn({256, kSteerObs});
+    torch::NoGradGuard no_grad;
+    const torch::Tensor mean = policy.SampleMean(batch.obs);
+    batch.samples = mean + policy.log_std().exp() * torch::randn(mean.sizes()) * *mask;
+    batch.old_log_prob = ModSkillPolicyImpl::LogProb(mean, policy.log_std(), batch.samples, *mask);
+    batch.old_values = critic->forward(batch.obs);
+    batch.advantages = torch::randn({256});
+    batch.returns = torch::randn({256});
+    torch::AutoGradMode grad(true);
+    UpdateWithPpo(policy, *critic, optimizer, batch, settings, generator);
+  }
+  EXPECT_FALSE(AllEqual(head_before, policy.task_head()->parameters())) << "the arm's head did not learn";
+  torch::NoGradGuard no_grad;
+  const torch::Tensor obs = torch::randn({8, kSteerObs});
+  const torch::Tensor mean = policy.SampleMean(obs);
+  EXPECT_EQ(mean.slice(1, 0, kArm * kEmbed).abs().max().item<double>(), 0.0) << "a part outside --task_parts moved";
+  EXPECT_GT(mean.slice(1, kArm * kEmbed).abs().max().item<double>(), 0.0);
+  SkillAttention attention = policy.attention();
+  const torch::Tensor prior = attention->forward(obs).z, z = policy.skills(obs).z;
+  EXPECT_TRUE(torch::allclose(z.slice(1, 0, kArm), prior.slice(1, 0, kArm), 1e-6, 1e-6));
+  EXPECT_FALSE(torch::allclose(z.select(1, kArm), prior.select(1, kArm), 1e-6, 1e-6));
+}
+
+TEST(SkillReuseTest, TaskPartsNameKnownPartsOverAPrior) {
+  TaskNetworks steer = SteerNetworks();
+  auto unknown = RestrictTaskHeadToParts(*steer.policy, {"R_Hand"}, "5part");
+  EXPECT_EQ(unknown.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(unknown.status().message(), HasSubstr("--task_parts[0]: 'R_Hand' is not a part of the 5part layout"));
+  ModelConfig config = Skills().ConfigFor(SmallConfig());
+  config.task_skill_prior = false;
+  ModSkillPolicy no_prior(LayoutFromWireSpec(Steer()), config);
+  auto refused = RestrictTaskHeadToParts(*no_prior, {"R_Arm"}, "5part");
+  EXPECT_EQ(refused.status().code(), absl::StatusCode::kFailedPrecondition);
+  EXPECT_THAT(refused.status().message(), HasSubstr("--task_parts"));
 }
 
 // (ii) The normalizer sees the self features as the tracker's did, and its updates leave them so.

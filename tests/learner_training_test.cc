@@ -16,6 +16,7 @@
 #include "common/policy/policy_checkpoint.h"
 #include "learner/evaluation.h"
 #include "learner/learning_rate_decay.h"
+#include "learner/policy_import.h"
 #include "learner/skill_library.h"
 #include "learner/task_evaluation.h"
 #include "learner/trainer.h"
@@ -240,7 +241,8 @@ TEST(LearnerTrainingTest, DiscriminatorReadsTheNewestAmpFramesAcrossAResume) {
   const IterationStats& stats = (*first)->history().back();
   EXPECT_TRUE(std::isfinite(stats.discriminator_loss));
   EXPECT_NE(stats.discriminator_loss, 0) << "the discriminator stepped";
-  EXPECT_EQ(*CheckpointAmpObsSize(dir + "/checkpoint.pt"), 2 * per_frame);
+  EXPECT_EQ(*CheckpointAmpObsSize(*ReadFileToString(dir + "/checkpoint.pt", kMaxCheckpointBytes), "checkpoint"),
+            2 * per_frame);
 
   config.resume = true;
   config.model.amp_frames = 0;  // the preset's: a resumed run keeps its checkpoint's frames
@@ -481,6 +483,16 @@ TEST(LearnerTrainingTest, BadConfigurationsAreClearErrors) {
       {[](TrainerConfig* c) { c->task_reach_center = {0.3, 0.1}; }, "--task_reach_center"},
       {[](TrainerConfig* c) { c->task_reach_center = {0, 0, 0.5}; }, "--task_reach_center"},  // 2 m box underground
       {[](TrainerConfig* c) { c->task_reach_box_size = 3, c->task_reach_center = {2, 0, 1.5}; }, "--task_reach_center"},
+      {[](TrainerConfig* c) { c->task_parts = {"R_Arm"}; }, "--task_parts"},  // tracking has no task head
+      // The server's bounds on the settings the server would use (its defaults where a flag is 0).
+      {[](TrainerConfig* c) { c->task_min_speed = -1; }, "--task_min_speed"},
+      {[](TrainerConfig* c) { c->task_min_speed = 4; }, "min_speed = 4"},  // above the server's default 3 m/s
+      {[&](TrainerConfig* c) { c->task_max_goal_interval_s = nan; }, "--task_max_goal_interval_s"},
+      {[](TrainerConfig* c) { c->task_min_goal_interval_s = 6; }, "--task_max_goal_interval_s"},
+      {[](TrainerConfig* c) {
+         c->task = "reach", c->skills = "skills.pt", c->task_parts = {"R_Arm"}, c->model.task_skill_prior = false;
+       },
+       "--task_parts"},
       {[](TrainerConfig* c) {
          c->model.whole_body = true;
          c->model.controller_input = ModelConfig::ControllerInput::kProprioception;
@@ -676,6 +688,21 @@ TEST(LearnerTrainingTest, SteerPolicyTrainsOverATrackersFrozenSkills) {
   EXPECT_EQ(refused.status().code(), absl::StatusCode::kInvalidArgument);
   EXPECT_THAT(std::string(refused.status().message()), HasSubstr("--task juggle"));
   EXPECT_THAT(std::string(refused.status().message()), HasSubstr("steer"));
+
+  // --task_parts R_Arm: the exported head leaves every other part's z on the prior.
+  TrainerConfig arm = config;
+  arm.run_dir = RunDir("steer_arm");
+  arm.resume = false;
+  arm.iterations = 2;
+  arm.task_parts = {"R_Arm"};
+  auto arm_trainer = Trainer::Create(arm);
+  ASSERT_TRUE(arm_trainer.ok()) << arm_trainer.status();
+  ASSERT_TRUE((*arm_trainer)->Run().ok());
+  auto arm_policy = ReadExportedPolicy(arm.run_dir + "/policy.pt");
+  ASSERT_TRUE(arm_policy.ok()) << arm_policy.status();
+  const torch::Tensor& last_bias = arm_policy->tensors.at("task_head_fc2_bias");  // [5 parts * 32]
+  EXPECT_EQ(last_bias.slice(0, 0, 4 * 32).abs().max().item<double>(), 0.0) << "a part outside --task_parts moved";
+  EXPECT_GT(last_bias.slice(0, 4 * 32).abs().max().item<double>(), 0.0) << "the arm's head did not learn";
   server->Shutdown(absl::Seconds(1));
 }
 

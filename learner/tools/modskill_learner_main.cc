@@ -94,6 +94,9 @@ ABSL_FLAG(double, task_log_std, -2.9, "--task: fixed log standard deviation of t
 ABSL_FLAG(bool, task_skill_prior, true,
           "--task steer|reach|strike: z = normalize(z_prior + task head), z_prior from the tracker's frozen attention on "
           "the anchored base motion (false: z = normalize(task head), the paper's high level)");
+ABSL_FLAG(std::vector<std::string>, task_parts, {},
+          "--task steer|reach|strike: the parts whose z the task head displaces, e.g. R_Arm for reach; the others play "
+          "the skill prior's z without exploration noise (default: every part, the paper's high level)");
 ABSL_FLAG(std::vector<std::string>, task_hidden, {},
           "--task: hidden sizes of the task head, e.g. 2048,1024,512 (default: the preset's; small 256,128)");
 ABSL_FLAG(std::vector<std::string>, controller_hidden, {},
@@ -390,6 +393,7 @@ absl::Status TaskFromFlags(TrainerConfig* config) {
   config->skills = absl::GetFlag(FLAGS_skills);
   config->model.task_log_std = absl::GetFlag(FLAGS_task_log_std);
   config->model.task_skill_prior = absl::GetFlag(FLAGS_task_skill_prior);
+  config->task_parts = absl::GetFlag(FLAGS_task_parts);
   config->loop_clips = absl::GetFlag(FLAGS_loop_clips);
   config->anchor_reference = absl::GetFlag(FLAGS_anchor_reference);
   config->init_from = absl::GetFlag(FLAGS_init_from);

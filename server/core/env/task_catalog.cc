@@ -1,6 +1,5 @@
 #include "server/core/env/task_catalog.h"
 
-#include <cmath>
 #include <iterator>
 
 #include "absl/strings/str_cat.h"
@@ -55,42 +54,6 @@ absl::StatusOr<TaskKind> ParseTask(absl::string_view name) {
   }
   return absl::InvalidArgumentError(
       absl::StrCat("task: unknown task '", name, "' (known: ", absl::StrJoin(names, ", "), ")"));
-}
-
-absl::Status TaskSettings::Validate() const {
-  if (!std::isfinite(min_speed) || min_speed < 0 || min_speed > 10) {
-    return absl::InvalidArgumentError(absl::StrCat("task_settings.min_speed: ", min_speed, " outside [0, 10] m/s"));
-  }
-  if (!std::isfinite(max_speed) || max_speed < min_speed || max_speed > 10) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("task_settings.max_speed: ", max_speed, " outside [min_speed = ", min_speed, ", 10] m/s"));
-  }
-  if (!std::isfinite(min_goal_interval_s) || min_goal_interval_s <= 0 || min_goal_interval_s > 3600) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("task_settings.min_goal_interval_s: ", min_goal_interval_s, " outside (0, 3600] s"));
-  }
-  if (!std::isfinite(max_goal_interval_s) || max_goal_interval_s < min_goal_interval_s ||
-      max_goal_interval_s > 3600) {
-    return absl::InvalidArgumentError(absl::StrCat("task_settings.max_goal_interval_s: ", max_goal_interval_s,
-                                                   " outside [min_goal_interval_s = ", min_goal_interval_s,
-                                                   ", 3600] s"));
-  }
-  if (!std::isfinite(reach_box_size) || reach_box_size <= 0 || reach_box_size > 4) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("task_settings.reach_box_size: ", reach_box_size, " outside (0, 4] m"));
-  }
-  const double half = 0.5 * reach_box_size;
-  constexpr const char* kCenterFields[3] = {"reach_center_x", "reach_center_y", "reach_center_z"};
-  for (int axis = 0; axis < 3; ++axis) {
-    const double low = axis == 2 ? 0.0 : -3.0;
-    const double c = reach_center[axis];
-    if (!std::isfinite(c) || c - half < low || c + half > 3.0) {
-      return absl::InvalidArgumentError(absl::StrCat("task_settings.", kCenterFields[axis], ": ", c,
-                                                     " puts the reach box (edge ", reach_box_size,
-                                                     " m) outside [", low, ", 3] m"));
-    }
-  }
-  return absl::OkStatus();
 }
 
 }  // namespace modskill

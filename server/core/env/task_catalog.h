@@ -12,6 +12,7 @@
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
 #include "common/policy/task_episode.h"
+#include "common/task_settings.h"
 
 namespace modskill {
 
@@ -47,21 +48,7 @@ inline bool IsGoalTask(TaskKind kind) {
 inline constexpr const char* kVrBodies[] = {"Head", "L_Hand", "R_Hand"};
 inline constexpr int kNumVrBodies = 3;
 
-// Steer's and reach's goals (SessionConfig.task_settings); 0 in a wire field means its default.
-struct TaskSettings {
-  double min_speed = 0.5;  // steer: target speed range (m/s)
-  double max_speed = 3.0;
-  double min_goal_interval_s = 2.0;  // steer, reach: a new goal after U(min, max) seconds
-  double max_goal_interval_s = 5.0;
-  // reach: targets are drawn uniformly in a box of this edge (m) centred at reach_center
-  // (heading frame on the root's ground point: forward, left, height). The paper's: 2 m at (0, 0, 1).
-  double reach_box_size = 2.0;
-  double reach_center[3] = {0.0, 0.0, 1.0};
-  // INVALID_ARGUMENT naming the field: speeds finite with 0 <= min <= max <= 10, intervals
-  // finite with 0 < min <= max <= 3600, the reach box's edge in (0, 4] and the box within 3 m of
-  // the root horizontally and between 0 and 3 m high.
-  absl::Status Validate() const;
-};
+// Steer's and reach's goals (SessionConfig.task_settings): TaskSettings (common/task_settings.h).
 
 // Goal tasks' step limit: TaskEpisodeSteps (common/policy/task_episode.h); tracking and VR
 // tracking run to the clip's end instead.

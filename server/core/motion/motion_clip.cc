@@ -163,7 +163,7 @@ absl::Status PlaceOnGround(const HumanoidSpec& spec, MotionClip* clip, FloorMode
   // The floor follows the clip, never above a frame's lowest point (floor_height.h): one
   // constant shift leaves stretches of a retargeted clip floating.
   std::vector<double> floor = FloorHeights(lowest, clip->fps);
-  if (mode == FloorMode::kStance) floor = PinFloorToStance(floor, lowest, StanceFrames(spec, *clip, floor));
+  if (mode == FloorMode::kStance) floor = PinFloorToStance(floor, lowest, StanceFrames(spec, *clip, floor, lowest));
   for (int f = 0; f < clip->num_frames; ++f) clip->root_pos[f].z() -= floor[f];
   return ComputeClipKinematics(spec, clip);
 }

@@ -70,16 +70,15 @@ StanceFeet MeasureStanceFeet(const HumanoidSpec& spec, const MotionClip& clip, c
 }
 
 std::vector<bool> StanceFrames(const HumanoidSpec& spec, const MotionClip& clip, const std::vector<double>& floor,
-                               const StanceFeetOptions& options) {
+                               const std::vector<double>& lowest, const StanceFeetOptions& options) {
   std::vector<bool> stance(clip.num_frames, false);
   if (clip.body_pos.empty() || clip.body_vel.empty()) return stance;
   constexpr double kLowestBodyTolerance = 0.005;
   const std::vector<Foot> feet = Feet(spec);
   for (int f = 0; f < clip.num_frames; ++f) {
-    const double frame_lowest = LowestGeomPoint(spec, clip, f);
     for (const Foot& foot : feet) {
-      const double lowest = FootLowestPoint(spec, clip, foot, f);
-      if (lowest <= frame_lowest + kLowestBodyTolerance && InStance(clip, foot, f, lowest, floor[f], options)) {
+      const double foot_lowest = FootLowestPoint(spec, clip, foot, f);
+      if (foot_lowest <= lowest[f] + kLowestBodyTolerance && InStance(clip, foot, f, foot_lowest, floor[f], options)) {
         stance[f] = true;
       }
     }

@@ -29,9 +29,10 @@ StanceFeet MeasureStanceFeet(const HumanoidSpec& spec, const MotionClip& clip, c
 
 // Per frame: whether a foot carries the body, judged against `floor` (the floor's height under
 // each frame): the foot within contact_height of it, its ankle slower than max_speed, and the
-// foot the frame's lowest body, within 5 mm (a crawl's knees carry it). Needs the kinematics.
+// foot the frame's lowest body, within 5 mm of `lowest` (each frame's LowestGeomPoint, which the
+// caller has already measured; a crawl's knees carry it). Needs the kinematics.
 std::vector<bool> StanceFrames(const HumanoidSpec& spec, const MotionClip& clip, const std::vector<double>& floor,
-                               const StanceFeetOptions& options = {});
+                               const std::vector<double>& lowest, const StanceFeetOptions& options = {});
 
 }  // namespace modskill
 
