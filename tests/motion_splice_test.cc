@@ -83,6 +83,34 @@ TEST(MotionSpliceTest, ClipTimingPlaysTheSourceAtItsOwnSpeedAndHoldsItsEnd) {
   }
 }
 
+TEST(MotionSpliceTest, HoldTimingReachesOneSourcePoseFromTheBaseAndHoldsIt) {
+  const MotionClip& walk = ShippedClip("deepmimic_walk");    // the base: 38 frames at 30 fps
+  const MotionClip& punch = ShippedClip("deepmimic_punch");  // 64 frames
+  const std::vector<int> arms = ArmBodies();
+  SpliceRequest request{"walk_holding_punch_arms", arms, SpliceTiming::kHold};
+  request.hold_at = 0.5;
+  auto spliced = SpliceParts(DefaultSpec(), walk, punch, request);
+  ASSERT_TRUE(spliced.ok()) << spliced.status();
+  const int ramp_frames = static_cast<int>(walk.fps * kHoldRampSeconds);
+  for (int b : arms) {
+    // hold_at 0.5 of the punch's 63 frame intervals: frame 31.5
+    const Quat held = punch.local(31, b).slerp(0.5, punch.local(32, b)).normalized();
+    EXPECT_LT(QuatDistance(spliced->local(0, b), walk.local(0, b)), 1e-6) << "starts on the base's pose";
+    for (int f = ramp_frames; f < walk.num_frames; ++f) {
+      EXPECT_LT(QuatDistance(spliced->local(f, b), held), 1e-6) << "frame " << f;
+    }
+    const int mid = ramp_frames / 2;  // halfway up the smoothstep: halfway between the two
+    const double to_base = QuatDistance(spliced->local(mid, b), walk.local(mid, b));
+    const double to_held = QuatDistance(spliced->local(mid, b), held);
+    EXPECT_NEAR(to_base, to_held, 0.05 * (to_base + to_held) + 1e-6) << "body " << b;
+  }
+  request.hold_at = 1.5;
+  auto outside = SpliceParts(DefaultSpec(), walk, punch, request);
+  ASSERT_FALSE(outside.ok());
+  EXPECT_NE(outside.status().message().find("hold_at 1.5"), std::string::npos) << outside.status();
+  EXPECT_TRUE(ParseSpliceTiming("hold").ok());
+}
+
 TEST(MotionSpliceTest, RefusesTheRootABadNameAndOtherRates) {
   const MotionClip& walk = ShippedClip("deepmimic_walk");
   const MotionClip& jog = ShippedClip("deepmimic_jog");

@@ -44,7 +44,9 @@ ABSL_FLAG(std::string, html, "", "view: the HTML page written (written atomicall
 ABSL_FLAG(std::vector<std::string>, parts, {}, "splice: the parts (of --layout) whose motion comes from SOURCE");
 ABSL_FLAG(std::string, layout, "", "splice: the part layout naming --parts (default: data/part_layouts.json's)");
 ABSL_FLAG(std::string, timing, "stretch",
-          "splice: stretch (SOURCE's whole duration over BASE's) or clip (SOURCE at its own speed, held at its end)");
+          "splice: stretch (SOURCE's whole duration over BASE's), clip (SOURCE at its own speed, held at its end) or "
+          "hold (SOURCE's pose at --hold_at held throughout, reached from BASE's pose over the first second)");
+ABSL_FLAG(double, hold_at, 0.5, "splice --timing hold: the held pose's time, a share of SOURCE's duration in [0, 1]");
 ABSL_FLAG(std::string, name, "", "splice: the new clip's name (its file is DIR/NAME.msclip)");
 
 namespace modskill {
@@ -281,6 +283,7 @@ int Splice(const std::vector<std::string>& inputs, const HumanoidSpec& spec, con
     }
   }
   request.timing = *timing;
+  request.hold_at = absl::GetFlag(FLAGS_hold_at);
   request.source_bodies = *bodies;
   request.label = absl::StrFormat("%s, with the %s of %s", base->label.empty() ? base->name : base->label,
                                   absl::StrJoin(absl::GetFlag(FLAGS_parts), ", "), source->name);
@@ -311,7 +314,7 @@ int main(int argc, char** argv) {
       "  modskill-motion import IN... --out DIR [--labels CSV] [--fps 30] [--floor window|stance]\n"
       "  modskill-motion inspect FILE... [--fps 30] [--floor window|stance]\n"
       "  modskill-motion view CLIP... --html OUT.html  (CLIP: a motion file or a library clip name)\n"
-      "  modskill-motion splice BASE SOURCE --parts R_Arm,L_Arm --name NAME --out DIR [--timing stretch|clip]\n"
+      "  modskill-motion splice BASE SOURCE --parts R_Arm,L_Arm --name NAME --out DIR [--timing stretch|clip|hold [--hold_at 0.5]]\n"
       "Formats: AMASS/SMPL(-H) .npz, CMU .bvh, DeepMimic humanoid3d .txt, native .msclip");
   std::vector<char*> args = absl::ParseCommandLine(argc, argv);
   if (args.size() < 3) {

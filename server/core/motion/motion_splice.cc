@@ -12,10 +12,25 @@ namespace modskill {
 namespace {
 
 // The source frame (fractional) that base frame `f` plays.
-double SourceFrame(const MotionClip& base, const MotionClip& source, SpliceTiming timing, int f) {
+double SourceFrame(const MotionClip& base, const MotionClip& source, const SpliceRequest& request, int f) {
   const double last = source.num_frames - 1;
-  if (timing == SpliceTiming::kStretch) return base.num_frames > 1 ? f * last / (base.num_frames - 1) : 0.0;
+  switch (request.timing) {
+    case SpliceTiming::kStretch:
+      return base.num_frames > 1 ? f * last / (base.num_frames - 1) : 0.0;
+    case SpliceTiming::kHold:
+      return request.hold_at * last;
+    case SpliceTiming::kClip:
+      break;
+  }
   return std::min(static_cast<double>(f), last);
+}
+
+// How much of the source's rotation frame `f` takes: all of it, except while a held pose is
+// reached (smoothstep over kHoldRampSeconds, so the ramp starts and ends at rest).
+double SourceWeight(const MotionClip& base, const SpliceRequest& request, int f) {
+  if (request.timing != SpliceTiming::kHold) return 1.0;
+  const double x = std::min(1.0, f / (base.fps * kHoldRampSeconds));
+  return x * x * (3.0 - 2.0 * x);
 }
 
 absl::Status CheckInputs(const HumanoidSpec& spec, const MotionClip& base, const MotionClip& source,
@@ -37,6 +52,10 @@ absl::Status CheckInputs(const HumanoidSpec& spec, const MotionClip& base, const
                                                    "; resample one first"));
   }
   if (request.source_bodies.empty()) return absl::InvalidArgumentError("splice: no body is taken from the source");
+  if (!(request.hold_at >= 0 && request.hold_at <= 1)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("splice: hold_at ", request.hold_at, " is not a share of the source's duration in [0, 1]"));
+  }
   for (int body : request.source_bodies) {
     if (body == 0) {
       return absl::InvalidArgumentError(absl::StrCat("splice: the root body '", spec.body(0).name,
@@ -54,7 +73,8 @@ absl::Status CheckInputs(const HumanoidSpec& spec, const MotionClip& base, const
 absl::StatusOr<SpliceTiming> ParseSpliceTiming(absl::string_view name) {
   if (name == "stretch") return SpliceTiming::kStretch;
   if (name == "clip") return SpliceTiming::kClip;
-  return absl::InvalidArgumentError(absl::StrCat("splice timing '", name, "' is not one of stretch, clip"));
+  if (name == "hold") return SpliceTiming::kHold;
+  return absl::InvalidArgumentError(absl::StrCat("splice timing '", name, "' is not one of stretch, clip, hold"));
 }
 
 absl::StatusOr<MotionClip> SpliceParts(const HumanoidSpec& spec, const MotionClip& base, const MotionClip& source,
@@ -77,11 +97,12 @@ absl::StatusOr<MotionClip> SpliceParts(const HumanoidSpec& spec, const MotionCli
   out.root_pos = base.root_pos;
   out.local_rot = base.local_rot;
   for (int f = 0; f < out.num_frames; ++f) {
-    const double frame = SourceFrame(base, source, request.timing, f);
+    const double frame = SourceFrame(base, source, request, f);
     const int f0 = std::min(static_cast<int>(frame), source.num_frames - 2);
-    const double alpha = frame - f0;
+    const double alpha = frame - f0, weight = SourceWeight(base, request, f);
     for (int body : request.source_bodies) {
-      out.local(f, body) = source.local(f0, body).slerp(alpha, source.local(f0 + 1, body)).normalized();
+      const Quat from_source = source.local(f0, body).slerp(alpha, source.local(f0 + 1, body)).normalized();
+      out.local(f, body) = weight < 1.0 ? base.local(f, body).slerp(weight, from_source).normalized() : from_source;
     }
   }
   if (auto status = ValidateClip(out); !status.ok()) return status;

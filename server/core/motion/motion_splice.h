@@ -19,7 +19,12 @@ namespace modskill {
 enum class SpliceTiming {
   kStretch,  // the whole source over the base's duration (one source cycle per base cycle)
   kClip,     // the source at its own speed from its first frame, held at its last frame
+  // One source pose (at SpliceRequest::hold_at) held for the whole base, reached from the base's
+  // own pose over the first kHoldRampSeconds: skills that hold a hand somewhere, which a reach
+  // needs and clips whose arms never stop do not teach.
+  kHold,
 };
+inline constexpr double kHoldRampSeconds = 1.0;
 
 absl::StatusOr<SpliceTiming> ParseSpliceTiming(absl::string_view name);
 
@@ -27,6 +32,7 @@ struct SpliceRequest {
   std::string name;                // the new clip's name (ValidateClipName)
   std::vector<int> source_bodies;  // spec body indices whose local rotations come from the source
   SpliceTiming timing = SpliceTiming::kStretch;
+  double hold_at = 0.5;  // kHold: the held pose's time, a share of the source's duration in [0, 1]
   std::string label;  // the new clip's caption; empty: the base's, "with <bodies> from <source>"
 };
 
