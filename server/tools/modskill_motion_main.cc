@@ -1,22 +1,27 @@
 // modskill-motion: imports motion files into the native clip format, inspects clips, writes
-// them as one self-contained HTML page, and splices one clip's parts onto another.
+// them as one self-contained HTML page, splices one clip's parts onto another, and makes held
+// reach poses.
 //
 //   modskill-motion import IN... --out DIR [--labels CSV] [--fps 30]
 //   modskill-motion inspect FILE...
 //   modskill-motion view CLIP... --html OUT.html   (CLIP: a motion file or a library clip name)
 //   modskill-motion splice BASE SOURCE --parts R_Arm,L_Arm --name NAME --out DIR
+//   modskill-motion reach BASE --count 32 --name NAME --out DIR   (held reach poses by IK)
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <optional>
+#include <random>
 #include <string>
 #include <vector>
 
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
 #include "absl/flags/usage.h"
+#include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
@@ -29,6 +34,7 @@
 #include "server/core/motion/stance_feet.h"
 #include "server/core/motion/motion_library.h"
 #include "server/core/motion/motion_splice.h"
+#include "server/core/motion/reach_pose.h"
 #include "server/core/sim/humanoid_spec.h"
 #include "server/core/sim/part_layout.h"
 #include "server/core/util/confined_path.h"
@@ -47,7 +53,13 @@ ABSL_FLAG(std::string, timing, "stretch",
           "splice: stretch (SOURCE's whole duration over BASE's), clip (SOURCE at its own speed, held at its end) or "
           "hold (SOURCE's pose at --hold_at held throughout, reached from BASE's pose over the first second)");
 ABSL_FLAG(double, hold_at, 0.5, "splice --timing hold: the held pose's time, a share of SOURCE's duration in [0, 1]");
-ABSL_FLAG(std::string, name, "", "splice: the new clip's name (its file is DIR/NAME.msclip)");
+ABSL_FLAG(std::string, name, "", "splice: the new clip's name (its file is DIR/NAME.msclip); reach: the prefix of NAME_000...");
+ABSL_FLAG(std::string, hand, "R_Hand", "reach: the body brought to each target; its part's chain up to it moves");
+ABSL_FLAG(int, count, 32, "reach: how many clips, one per target drawn uniformly in the box");
+ABSL_FLAG(int, seed, 1, "reach: the seed of the targets");
+ABSL_FLAG(double, box_size, 2.0, "reach: the target box's edge (m), as the reach task's --task_reach_box_size");
+ABSL_FLAG(std::vector<std::string>, box_center, std::vector<std::string>({"0", "0", "1"}),
+          "reach: the box's centre x,y,z (m) in the heading frame on the ground, as the reach task's");
 
 namespace modskill {
 namespace {
@@ -249,18 +261,107 @@ int View(const std::vector<std::string>& inputs, const HumanoidSpec& spec, const
   return 0;
 }
 
-// The bodies of the named parts of --layout, or an error naming the unknown part.
-absl::StatusOr<std::vector<int>> PartBodies(const HumanoidSpec& spec) {
+// --layout, or the catalog's default.
+absl::StatusOr<PartLayout> LayoutFromFlags(const HumanoidSpec& spec) {
   absl::StatusOr<PartLayoutCatalog> catalog = PartLayoutCatalog::LoadDefault(spec);
   if (!catalog.ok()) return catalog.status();
   const std::string layout_name = absl::GetFlag(FLAGS_layout).empty() ? catalog->default_name()
                                                                       : absl::GetFlag(FLAGS_layout);
   absl::StatusOr<PartLayout> layout = catalog->Get(layout_name);
   if (!layout.ok()) return absl::InvalidArgumentError(absl::StrCat("--layout: ", layout.status().message()));
+  return layout;
+}
+
+// The bodies of the named parts of --layout, or an error naming the unknown part.
+absl::StatusOr<std::vector<int>> PartBodies(const HumanoidSpec& spec) {
+  absl::StatusOr<PartLayout> layout = LayoutFromFlags(spec);
+  if (!layout.ok()) return layout.status();
   absl::StatusOr<std::vector<int>> bodies = layout->BodiesOfParts(absl::GetFlag(FLAGS_parts), "--parts");
   if (!bodies.ok()) return bodies.status();
   if (bodies->empty()) return absl::InvalidArgumentError("--parts: name at least one part");
   return bodies;
+}
+
+// --hand, and the bodies of its part on the way from the part's top down to it: the chain the
+// inverse kinematics turns (R_Thorax, R_Shoulder, R_Elbow, R_Wrist, R_Hand in the 5-part layout).
+absl::StatusOr<ReachPoseRequest> ReachChainFromFlags(const HumanoidSpec& spec) {
+  ReachPoseRequest request;
+  request.hand = spec.BodyIndex(absl::GetFlag(FLAGS_hand));
+  if (request.hand <= 0) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--hand '", absl::GetFlag(FLAGS_hand), "' is not a non-root body of the skeleton"));
+  }
+  absl::StatusOr<PartLayout> layout = LayoutFromFlags(spec);
+  if (!layout.ok()) return layout.status();
+  for (const BodyPart& part : layout->parts) {
+    if (std::find(part.bodies.begin(), part.bodies.end(), request.hand) == part.bodies.end()) continue;
+    for (int b = request.hand; b > 0; b = spec.body(b).parent) {
+      if (std::find(part.bodies.begin(), part.bodies.end(), b) != part.bodies.end()) request.moved_bodies.push_back(b);
+    }
+  }
+  return request;
+}
+
+// --box_size and --box_center, checked as the reach task checks its box.
+absl::StatusOr<std::pair<double, Vec3>> ReachBoxFromFlags() {
+  const double size = absl::GetFlag(FLAGS_box_size);
+  const std::vector<std::string> center_text = absl::GetFlag(FLAGS_box_center);
+  Vec3 center;
+  if (center_text.size() != 3) return absl::InvalidArgumentError("--box_center: expected x,y,z");
+  for (int k = 0; k < 3; ++k) {
+    if (!absl::SimpleAtod(center_text[k], &center[k]) || !std::isfinite(center[k]) || std::abs(center[k]) > 3) {
+      return absl::InvalidArgumentError(absl::StrCat("--box_center '", center_text[k], "': expected a number in [-3, 3] m"));
+    }
+  }
+  if (!(size > 0 && size <= 4)) return absl::InvalidArgumentError(absl::StrCat("--box_size ", size, ": expected (0, 4] m"));
+  if (absl::GetFlag(FLAGS_count) < 1 || absl::GetFlag(FLAGS_count) > 1000) {
+    return absl::InvalidArgumentError(absl::StrCat("--count ", absl::GetFlag(FLAGS_count), ": expected 1 to 1000"));
+  }
+  return std::make_pair(size, center);
+}
+
+// Writes one held reach pose per target drawn in the box, and prints how close each hand came.
+int Reach(const std::vector<std::string>& inputs, const HumanoidSpec& spec, const ImportOptions& options) {
+  const std::string out_dir = absl::GetFlag(FLAGS_out), prefix = absl::GetFlag(FLAGS_name);
+  if (inputs.size() != 1 || out_dir.empty() || prefix.empty()) {
+    std::fprintf(stderr, "error: reach needs BASE --name NAME --out DIR\n");
+    return 2;
+  }
+  std::optional<MotionLibrary> library;
+  absl::StatusOr<MotionClip> base = ResolveClip(inputs[0], spec, options, &library);
+  absl::StatusOr<ReachPoseRequest> request = ReachChainFromFlags(spec);
+  absl::StatusOr<std::pair<double, Vec3>> box = ReachBoxFromFlags();
+  for (const absl::Status& status : {base.status(), request.status(), box.status()}) {
+    if (!status.ok()) {
+      std::fprintf(stderr, "error: %s\n", std::string(status.message()).c_str());
+      return 2;
+    }
+  }
+  std::mt19937_64 rng(absl::GetFlag(FLAGS_seed));
+  std::uniform_real_distribution<double> unit(-0.5 * box->first, 0.5 * box->first);
+  std::error_code error;
+  std::filesystem::create_directories(out_dir, error);
+  std::vector<double> distances;
+  for (int i = 0; i < absl::GetFlag(FLAGS_count); ++i) {
+    request->name = absl::StrFormat("%s_%03d", prefix, i);
+    request->target = box->second + Vec3(unit(rng), unit(rng), unit(rng));
+    absl::StatusOr<ReachPose> pose = MakeReachPose(spec, *base, *request);
+    absl::StatusOr<std::string> path =
+        pose.ok() ? ConfinedPath(out_dir, request->name + std::string(kClipFileExtension)) : pose.status();
+    const absl::Status written = path.ok() ? WriteClipFile(*path, pose->clip) : path.status();
+    if (!written.ok()) {
+      std::fprintf(stderr, "error: %s: %s\n", request->name.c_str(), std::string(written.message()).c_str());
+      return 1;
+    }
+    distances.push_back(pose->distance);
+    std::printf("%-24s target (%+.2f, %+.2f, %.2f) m  hand %.3f m from it  -> %s\n", request->name.c_str(),
+                request->target.x(), request->target.y(), request->target.z(), pose->distance, path->c_str());
+  }
+  std::sort(distances.begin(), distances.end());
+  const auto within = std::count_if(distances.begin(), distances.end(), [](double d) { return d < 0.05; });
+  std::printf("%zu clips: hand-to-target median %.3f m, %ld within 5 cm (the rest out of the arm's reach)\n",
+              distances.size(), distances[distances.size() / 2], static_cast<long>(within));
+  return 0;
 }
 
 int Splice(const std::vector<std::string>& inputs, const HumanoidSpec& spec, const ImportOptions& options) {
@@ -310,18 +411,21 @@ int Splice(const std::vector<std::string>& inputs, const HumanoidSpec& spec, con
 
 int main(int argc, char** argv) {
   absl::SetProgramUsageMessage(
-      "imports, inspects, views and splices motion clips.\n"
+      "imports, inspects, views and splices motion clips, and makes held reach poses.\n"
       "  modskill-motion import IN... --out DIR [--labels CSV] [--fps 30] [--floor window|stance]\n"
       "  modskill-motion inspect FILE... [--fps 30] [--floor window|stance]\n"
       "  modskill-motion view CLIP... --html OUT.html  (CLIP: a motion file or a library clip name)\n"
       "  modskill-motion splice BASE SOURCE --parts R_Arm,L_Arm --name NAME --out DIR [--timing stretch|clip|hold [--hold_at 0.5]]\n"
+      "  modskill-motion reach BASE --name NAME --out DIR [--count 32] [--seed 1] [--hand R_Hand] [--box_size 2] "
+      "[--box_center 0,0,1]\n"
       "Formats: AMASS/SMPL(-H) .npz, CMU .bvh, DeepMimic humanoid3d .txt, native .msclip");
   std::vector<char*> args = absl::ParseCommandLine(argc, argv);
   if (args.size() < 3) {
     std::fprintf(stderr,
                  "usage: modskill-motion import IN... --out DIR | modskill-motion inspect FILE... | "
                  "modskill-motion view CLIP... --html OUT.html | "
-                 "modskill-motion splice BASE SOURCE --parts P,... --name NAME --out DIR\n");
+                 "modskill-motion splice BASE SOURCE --parts P,... --name NAME --out DIR | "
+                 "modskill-motion reach BASE --name NAME --out DIR\n");
     return 2;
   }
   const std::string command = args[1];
@@ -341,6 +445,8 @@ int main(int argc, char** argv) {
   if (command == "inspect") return modskill::Inspect(files, *spec, *options);
   if (command == "view") return modskill::View(files, *spec, *options);
   if (command == "splice") return modskill::Splice(files, *spec, *options);
-  std::fprintf(stderr, "error: unknown command '%s' (expected import, inspect, view or splice)\n", command.c_str());
+  if (command == "reach") return modskill::Reach(files, *spec, *options);
+  std::fprintf(stderr, "error: unknown command '%s' (expected import, inspect, view, splice or reach)\n",
+               command.c_str());
   return 2;
 }

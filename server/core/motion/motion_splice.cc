@@ -25,12 +25,9 @@ double SourceFrame(const MotionClip& base, const MotionClip& source, const Splic
   return std::min(static_cast<double>(f), last);
 }
 
-// How much of the source's rotation frame `f` takes: all of it, except while a held pose is
-// reached (smoothstep over kHoldRampSeconds, so the ramp starts and ends at rest).
+// How much of the source's rotation frame `f` takes: all of it, except while a held pose is reached.
 double SourceWeight(const MotionClip& base, const SpliceRequest& request, int f) {
-  if (request.timing != SpliceTiming::kHold) return 1.0;
-  const double x = std::min(1.0, f / (base.fps * kHoldRampSeconds));
-  return x * x * (3.0 - 2.0 * x);
+  return request.timing == SpliceTiming::kHold ? HoldRampWeight(base.fps, f) : 1.0;
 }
 
 absl::Status CheckInputs(const HumanoidSpec& spec, const MotionClip& base, const MotionClip& source,
@@ -69,6 +66,11 @@ absl::Status CheckInputs(const HumanoidSpec& spec, const MotionClip& base, const
 }
 
 }  // namespace
+
+double HoldRampWeight(double fps, int frame) {
+  const double x = std::min(1.0, frame / (fps * kHoldRampSeconds));
+  return x * x * (3.0 - 2.0 * x);
+}
 
 absl::StatusOr<SpliceTiming> ParseSpliceTiming(absl::string_view name) {
   if (name == "stretch") return SpliceTiming::kStretch;

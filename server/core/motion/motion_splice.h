@@ -26,6 +26,10 @@ enum class SpliceTiming {
 };
 inline constexpr double kHoldRampSeconds = 1.0;
 
+// The held pose's share of frame `frame` of a clip at `fps`: a smoothstep from 0 to 1 over
+// kHoldRampSeconds, so the ramp starts and ends at rest.
+double HoldRampWeight(double fps, int frame);
+
 absl::StatusOr<SpliceTiming> ParseSpliceTiming(absl::string_view name);
 
 struct SpliceRequest {
