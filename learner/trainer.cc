@@ -170,8 +170,10 @@ absl::Status Trainer::ChooseAmpFrames() {
       layout_.amp_obs_per_frame > 0) {
     const std::string path = config_.run_dir + "/checkpoint.pt";
     auto bytes = ReadFileToString(path, kMaxCheckpointBytes);
-    if (bytes.ok()) resume_bytes_ = *std::move(bytes);  // LoadCheckpoint reports a file it cannot read
-    const absl::StatusOr<int64_t> stored = CheckpointAmpObsSize(resume_bytes_, path);
+    auto archive = bytes.ok() ? LoadCheckpointArchive(*bytes, path) : bytes.status();
+    if (archive.ok()) resume_archive_ = *std::move(archive);  // LoadCheckpoint reports a file it cannot load
+    const absl::StatusOr<int64_t> stored =
+        resume_archive_ ? CheckpointAmpObsSize(*resume_archive_, path) : absl::StatusOr<int64_t>(archive.status());
     if (stored.ok() && *stored % layout_.amp_obs_per_frame == 0) {
       config_.model.amp_frames = *stored / layout_.amp_obs_per_frame;
     }

@@ -69,9 +69,11 @@ struct IterationStats {
 // are a few hundred MB).
 inline constexpr size_t kMaxCheckpointBytes = size_t{4} << 30;
 
-// The AMP observation size a trainer checkpoint's discriminator was trained on, from the
-// checkpoint's bytes (`origin` names them in errors).
-absl::StatusOr<int64_t> CheckpointAmpObsSize(const std::string& checkpoint_bytes, const std::string& origin);
+// A trainer checkpoint's bytes, deserialized (`origin` names them in errors).
+absl::StatusOr<std::unique_ptr<torch::serialize::InputArchive>> LoadCheckpointArchive(const std::string& checkpoint_bytes,
+                                                                                      const std::string& origin);
+// The AMP observation size a trainer checkpoint's discriminator was trained on.
+absl::StatusOr<int64_t> CheckpointAmpObsSize(torch::serialize::InputArchive& checkpoint, const std::string& origin);
 
 class Trainer {
  public:
@@ -103,11 +105,12 @@ class Trainer {
 
   // Full training state (networks, optimizers, normalizers, counters), written atomically.
   absl::Status SaveCheckpoint(const std::string& path);
-  // Reads `path`, or takes the bytes ChooseAmpFrames already read from it.
+  // Reads `path`, or takes the archive ChooseAmpFrames already loaded from it.
   absl::Status LoadCheckpoint(const std::string& path);
-  // The same state as bytes, and restored from bytes (`origin` names them in errors).
+  // The same state as bytes, and restored from bytes or a loaded archive (`origin` names them in errors).
   absl::StatusOr<std::string> SerializeState();
   absl::Status RestoreState(const std::string& bytes, const std::string& origin);
+  absl::Status RestoreState(torch::serialize::InputArchive& archive, const std::string& origin);
   // The TorchScript policy the server's Rollout and Python's torch.jit.load run.
   absl::Status ExportPolicy(const std::string& path);
 
@@ -209,7 +212,8 @@ class Trainer {
   std::optional<SkillLibrary> skills_;
   v1::EnvSpec tracking_spec_;
   std::optional<TaskReturn> task_return_;
-  std::string resume_bytes_;  // the checkpoint a resume starts from, read once for ChooseAmpFrames and LoadCheckpoint
+  // The checkpoint a resume starts from, read and deserialized once for ChooseAmpFrames and LoadCheckpoint.
+  std::unique_ptr<torch::serialize::InputArchive> resume_archive_;
   ModSkillPolicy policy_{nullptr};
   Critic critic_{nullptr};
   AmpDiscriminator discriminator_{nullptr};

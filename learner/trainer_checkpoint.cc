@@ -59,13 +59,25 @@ absl::StatusOr<std::string> Trainer::SerializeState() {
   }
 }
 
-absl::StatusOr<int64_t> CheckpointAmpObsSize(const std::string& checkpoint_bytes, const std::string& origin) {
+absl::StatusOr<std::unique_ptr<torch::serialize::InputArchive>> LoadCheckpointArchive(const std::string& checkpoint_bytes,
+                                                                                      const std::string& origin) {
   try {
-    torch::serialize::InputArchive archive;
+    auto archive = std::make_unique<torch::serialize::InputArchive>();
     std::istringstream in(checkpoint_bytes, std::ios::binary);
-    archive.load_from(in);
+    archive->load_from(in);
+    return archive;
+  } catch (const std::exception& e) {
+    std::string message = e.what();
+    return absl::InvalidArgumentError(
+        absl::StrCat(origin, ": not a loadable training checkpoint (different preset or layout?): ",
+                     message.substr(0, message.find('\n'))));
+  }
+}
+
+absl::StatusOr<int64_t> CheckpointAmpObsSize(torch::serialize::InputArchive& checkpoint, const std::string& origin) {
+  try {
     torch::Tensor amp_obs_size;
-    archive.read("amp_obs_size", amp_obs_size);
+    checkpoint.read("amp_obs_size", amp_obs_size);
     return amp_obs_size.item<int64_t>();
   } catch (const std::exception& e) {
     std::string message = e.what();
@@ -114,21 +126,25 @@ absl::Status CheckStoredWidths(torch::serialize::InputArchive& archive, const Mo
 }  // namespace
 
 absl::Status Trainer::LoadCheckpoint(const std::string& path) {
-  if (resume_bytes_.empty()) {
+  if (!resume_archive_) {
     auto bytes = ReadFileToString(path, kMaxCheckpointBytes);
     if (!bytes.ok()) return bytes.status();
-    resume_bytes_ = *std::move(bytes);
+    auto archive = LoadCheckpointArchive(*bytes, path);
+    if (!archive.ok()) return archive.status();
+    resume_archive_ = *std::move(archive);
   }
-  const absl::Status restored = RestoreState(resume_bytes_, path);
-  resume_bytes_ = std::string();  // a checkpoint is megabytes; the run does not need it again
+  const absl::Status restored = RestoreState(*resume_archive_, path);
+  resume_archive_.reset();  // a checkpoint is megabytes; the run does not need it again
   return restored;
 }
 
-absl::Status Trainer::RestoreState(const std::string& bytes, const std::string& path) {
+absl::Status Trainer::RestoreState(const std::string& bytes, const std::string& origin) {
+  auto archive = LoadCheckpointArchive(bytes, origin);
+  return archive.ok() ? RestoreState(**archive, origin) : archive.status();
+}
+
+absl::Status Trainer::RestoreState(torch::serialize::InputArchive& archive, const std::string& path) {
   try {
-    torch::serialize::InputArchive archive;
-    std::istringstream in(bytes, std::ios::binary);
-    archive.load_from(in);
     // Each data-parallel rank's batch is a share of the step's: a run resumes with its world size
     // (checkpoints from before data-parallel runs had one learner).
     torch::Tensor world_size = torch::tensor(int64_t{1});

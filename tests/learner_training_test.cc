@@ -212,6 +212,14 @@ TEST(LearnerTrainingTest, CheckpointRoundTripAndResume) {
   absl::Status status = (*resumed)->LoadCheckpoint(damaged);
   ASSERT_FALSE(status.ok());
   EXPECT_THAT(std::string(status.message()), HasSubstr("damaged.pt"));
+  // So is a resume from a run directory whose checkpoint is damaged (read once, before the networks).
+  TrainerConfig damaged_run = config;
+  damaged_run.run_dir = RunDir("damaged_run");
+  std::filesystem::create_directories(damaged_run.run_dir);
+  ASSERT_TRUE(WriteFileAtomically(damaged_run.run_dir + "/checkpoint.pt", bytes.substr(0, bytes.size() / 2)).ok());
+  auto refused = Trainer::Create(damaged_run);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_THAT(std::string(refused.status().message()), HasSubstr("damaged_run/checkpoint.pt: not a loadable training"));
   // A checkpoint from another layout does not load into this one.
   TrainerConfig three = SmallConfig({server->port()}, RunDir("three"));
   three.part_layout = "3part";
@@ -241,8 +249,9 @@ TEST(LearnerTrainingTest, DiscriminatorReadsTheNewestAmpFramesAcrossAResume) {
   const IterationStats& stats = (*first)->history().back();
   EXPECT_TRUE(std::isfinite(stats.discriminator_loss));
   EXPECT_NE(stats.discriminator_loss, 0) << "the discriminator stepped";
-  EXPECT_EQ(*CheckpointAmpObsSize(*ReadFileToString(dir + "/checkpoint.pt", kMaxCheckpointBytes), "checkpoint"),
-            2 * per_frame);
+  auto checkpoint = LoadCheckpointArchive(*ReadFileToString(dir + "/checkpoint.pt", kMaxCheckpointBytes), "checkpoint");
+  ASSERT_TRUE(checkpoint.ok()) << checkpoint.status();
+  EXPECT_EQ(*CheckpointAmpObsSize(**checkpoint, "checkpoint"), 2 * per_frame);
 
   config.resume = true;
   config.model.amp_frames = 0;  // the preset's: a resumed run keeps its checkpoint's frames
