@@ -171,11 +171,12 @@ absl::Status Trainer::ChooseAmpFrames() {
     const std::string path = config_.run_dir + "/checkpoint.pt";
     auto bytes = ReadFileToString(path, kMaxCheckpointBytes);
     auto archive = bytes.ok() ? LoadCheckpointArchive(*bytes, path) : bytes.status();
-    if (archive.ok()) resume_archive_ = *std::move(archive);  // LoadCheckpoint reports a file it cannot load
-    const absl::StatusOr<int64_t> stored =
-        resume_archive_ ? CheckpointAmpObsSize(*resume_archive_, path) : absl::StatusOr<int64_t>(archive.status());
-    if (stored.ok() && *stored % layout_.amp_obs_per_frame == 0) {
-      config_.model.amp_frames = *stored / layout_.amp_obs_per_frame;
+    if (archive.ok()) {  // otherwise LoadCheckpoint reports the file it cannot load
+      resume_archive_ = *std::move(archive);
+      const absl::StatusOr<int64_t> stored = CheckpointAmpObsSize(*resume_archive_, path);
+      if (stored.ok() && *stored % layout_.amp_obs_per_frame == 0) {
+        config_.model.amp_frames = *stored / layout_.amp_obs_per_frame;
+      }
     }
   }
   return ReadAmpFrames(config_.model.amp_frames, &layout_);

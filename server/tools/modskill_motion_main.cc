@@ -27,6 +27,7 @@
 #include "absl/strings/str_join.h"
 #include "absl/strings/str_split.h"
 #include "absl/strings/strip.h"
+#include "common/task_settings.h"
 #include "common/viewer/viewer_html.h"
 #include "server/core/motion/clip_file.h"
 #include "server/core/motion/clip_view.h"
@@ -302,22 +303,23 @@ absl::StatusOr<ReachPoseRequest> ReachChainFromFlags(const HumanoidSpec& spec) {
   return request;
 }
 
-// --box_size and --box_center, checked as the reach task checks its box.
+// --box_size and --box_center, checked by the reach task's own bounds (TaskSettings::Validate), so
+// the tool makes poses only for boxes a reach session accepts.
 absl::StatusOr<std::pair<double, Vec3>> ReachBoxFromFlags() {
-  const double size = absl::GetFlag(FLAGS_box_size);
   const std::vector<std::string> center_text = absl::GetFlag(FLAGS_box_center);
-  Vec3 center;
   if (center_text.size() != 3) return absl::InvalidArgumentError("--box_center: expected x,y,z");
+  TaskSettings box;
+  box.reach_box_size = absl::GetFlag(FLAGS_box_size);
   for (int k = 0; k < 3; ++k) {
-    if (!absl::SimpleAtod(center_text[k], &center[k]) || !std::isfinite(center[k]) || std::abs(center[k]) > 3) {
-      return absl::InvalidArgumentError(absl::StrCat("--box_center '", center_text[k], "': expected a number in [-3, 3] m"));
+    if (!absl::SimpleAtod(center_text[k], &box.reach_center[k])) {
+      return absl::InvalidArgumentError(absl::StrCat("--box_center '", center_text[k], "': not a number"));
     }
   }
-  if (!(size > 0 && size <= 4)) return absl::InvalidArgumentError(absl::StrCat("--box_size ", size, ": expected (0, 4] m"));
-  if (absl::GetFlag(FLAGS_count) < 1 || absl::GetFlag(FLAGS_count) > 1000) {
-    return absl::InvalidArgumentError(absl::StrCat("--count ", absl::GetFlag(FLAGS_count), ": expected 1 to 1000"));
-  }
-  return std::make_pair(size, center);
+  const absl::Status valid = box.Validate([](absl::string_view field) {
+    return field == "reach_box_size" ? std::string("--box_size") : absl::StrCat("--box_center ", field.substr(13));
+  });
+  if (!valid.ok()) return valid;
+  return std::make_pair(box.reach_box_size, Vec3(box.reach_center[0], box.reach_center[1], box.reach_center[2]));
 }
 
 // Writes one held reach pose per target drawn in the box, and prints how close each hand came.
@@ -331,7 +333,11 @@ int Reach(const std::vector<std::string>& inputs, const HumanoidSpec& spec, cons
   absl::StatusOr<MotionClip> base = ResolveClip(inputs[0], spec, options, &library);
   absl::StatusOr<ReachPoseRequest> request = ReachChainFromFlags(spec);
   absl::StatusOr<std::pair<double, Vec3>> box = ReachBoxFromFlags();
-  for (const absl::Status& status : {base.status(), request.status(), box.status()}) {
+  const int count = absl::GetFlag(FLAGS_count);
+  const absl::Status count_ok = count >= 1 && count <= 1000
+                                    ? absl::OkStatus()
+                                    : absl::InvalidArgumentError(absl::StrCat("--count ", count, ": expected 1 to 1000"));
+  for (const absl::Status& status : {base.status(), request.status(), box.status(), count_ok}) {
     if (!status.ok()) {
       std::fprintf(stderr, "error: %s\n", std::string(status.message()).c_str());
       return 2;
@@ -342,7 +348,7 @@ int Reach(const std::vector<std::string>& inputs, const HumanoidSpec& spec, cons
   std::error_code error;
   std::filesystem::create_directories(out_dir, error);
   std::vector<double> distances;
-  for (int i = 0; i < absl::GetFlag(FLAGS_count); ++i) {
+  for (int i = 0; i < count; ++i) {
     request->name = absl::StrFormat("%s_%03d", prefix, i);
     request->target = box->second + Vec3(unit(rng), unit(rng), unit(rng));
     absl::StatusOr<ReachPose> pose = MakeReachPose(spec, *base, *request);

@@ -26,9 +26,11 @@ expect_error() {  # expect_error PATTERN ARGS...: exit status != 0, PATTERN on s
 }
 expect_error "--hand 'Tail'" deepmimic_walk --name x --hand Tail
 expect_error "--hand 'Pelvis'" deepmimic_walk --name x --hand Pelvis
-expect_error "--box_size 0: expected (0, 4]" deepmimic_walk --name x --box_size 0
+expect_error "--box_size: 0 outside (0, 4\] m" deepmimic_walk --name x --box_size 0
 expect_error "--box_center: expected x,y,z" deepmimic_walk --name x --box_center 1,2
-expect_error "--box_center 'nan'" deepmimic_walk --name x --box_center 0,nan,1
+expect_error "--box_center y: nan puts the reach box" deepmimic_walk --name x --box_center 0,nan,1
+expect_error "--box_center z: 0.5 puts the reach box (edge 2 m) outside \[0, 3\] m" deepmimic_walk --name x --box_center 0,0,0.5
+expect_error "--box_center 'abc': not a number" deepmimic_walk --name x --box_center 0,abc,1
 expect_error "--count 0" deepmimic_walk --name x --count 0
 expect_error "no clip of that name" no_such_clip --name x
 expect_error "reach pose name '../x_000'" deepmimic_walk --name ../x

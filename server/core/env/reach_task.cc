@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "server/core/sim/heading_frame.h"
+
 namespace modskill {
 
 void ReachTask::DrawGoal(const HumanoidState& sim, std::mt19937_64& rng) {
@@ -11,9 +13,7 @@ void ReachTask::DrawGoal(const HumanoidState& sim, std::mt19937_64& rng) {
   const double x = settings.reach_center[0] + unit(rng), y = settings.reach_center[1] + unit(rng),
                z = settings.reach_center[2] + unit(rng);
   // The box is centred in the heading frame on the root's ground point; z is height above ground.
-  Vec3 ground = sim.body_pos[0];
-  ground.z() = 0;
-  target_ = ground + HeadingRotation(sim.body_rot[0]) * Vec3(x, y, z);
+  target_ = HeadingGroundPointToWorld(sim.body_pos[0], sim.body_rot[0], Vec3(x, y, z));
 }
 
 void ReachTask::Reward(const HumanoidState& sim, const mjData* data, float* terms) {

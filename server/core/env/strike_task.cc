@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "server/core/sim/heading_frame.h"
 #include "server/core/sim/mjcf_builder.h"
 
 namespace modskill {
@@ -22,10 +23,8 @@ void StrikeTask::DrawGoal(const HumanoidState& sim, std::mt19937_64& rng) {
   const double distance = std::uniform_real_distribution<double>(kMinDistance, kMaxDistance)(rng);
   const double bearing = std::uniform_real_distribution<double>(-kMaxBearing, kMaxBearing)(rng);
   yaw_ = std::uniform_real_distribution<double>(-M_PI, M_PI)(rng);
-  Vec3 ground = sim.body_pos[0];
-  ground.z() = 0;
-  position_ = ground + HeadingRotation(sim.body_rot[0]) * Vec3(distance * std::cos(bearing),
-                                                               distance * std::sin(bearing), 0);
+  position_ = HeadingGroundPointToWorld(sim.body_pos[0], sim.body_rot[0],
+                                       Vec3(distance * std::cos(bearing), distance * std::sin(bearing), 0));
   position_.z() = kStrikeTargetHalfExtents[2];
 }
 

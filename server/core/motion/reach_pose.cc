@@ -7,6 +7,7 @@
 #include "absl/strings/str_format.h"
 #include "server/core/motion/clip_name.h"
 #include "server/core/motion/motion_splice.h"
+#include "server/core/sim/heading_frame.h"
 #include "server/core/sim/reach_ik.h"
 
 namespace modskill {
@@ -47,9 +48,7 @@ absl::Status CheckInputs(const HumanoidSpec& spec, const MotionClip& base, const
 
 // The world point the reach task means by `target` in frame `frame` (ReachTask::DrawGoal).
 Vec3 WorldTarget(const MotionClip& clip, int frame, const Vec3& target) {
-  Vec3 ground = clip.root_pos[frame];
-  ground.z() = 0;
-  return ground + HeadingRotation(clip.local(frame, 0)) * target;
+  return HeadingGroundPointToWorld(clip.root_pos[frame], clip.local(frame, 0), target);
 }
 
 }  // namespace
