@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "learner/ppo_loss.h"
+#include "learner/reach_teacher.h"
 
 namespace modskill::learner {
 namespace {
@@ -49,13 +50,18 @@ PpoUpdateStats UpdateWithPpo(ModSkillPolicyImpl& policy, CriticImpl& critic, tor
     for (int64_t step = 0; step < steps; ++step) {
       const torch::Tensor index = order.slice(0, step * minibatch, (step + 1) * minibatch);
       const torch::Tensor obs = batch.obs.index_select(0, index);
+      const torch::Tensor mean = policy.SampleMean(obs);
       const torch::Tensor new_log_prob =
-          ModSkillPolicyImpl::LogProb(policy.SampleMean(obs), log_std, batch.samples.index_select(0, index),
-                                      settings.sampled_dims);
+          ModSkillPolicyImpl::LogProb(mean, log_std, batch.samples.index_select(0, index), settings.sampled_dims);
       PpoLossTerms loss = ComputePpoLoss(new_log_prob, batch.old_log_prob.index_select(0, index),
                                          batch.advantages.index_select(0, index), critic.NormalizedValue(obs),
                                          batch.old_values.index_select(0, index), batch.returns.index_select(0, index),
                                          settings.clip_ratio, settings.value_clip, settings.value_coefficient);
+      torch::Tensor teacher_loss;
+      if (settings.teacher_weight > 0) {
+        teacher_loss = TeacherLoss(policy.TaskZ(obs, mean), batch.teacher_z.index_select(0, index), settings.teacher_parts);
+        loss.total = loss.total + settings.teacher_weight * teacher_loss;
+      }
       const bool finite = std::isfinite(loss.total.item<double>());
       if (!finite && !average) {
         ++stats.skipped_updates;
@@ -81,6 +87,7 @@ PpoUpdateStats UpdateWithPpo(ModSkillPolicyImpl& policy, CriticImpl& critic, tor
       stats.value_loss += loss.value_loss.item<double>();
       stats.approx_kl += loss.approx_kl.item<double>();
       stats.clip_fraction += loss.clip_fraction.item<double>();
+      if (teacher_loss.defined()) stats.teacher_loss += teacher_loss.item<double>();
       ++stats.updates;
     }
   }
@@ -95,6 +102,7 @@ PpoUpdateStats UpdateWithPpo(ModSkillPolicyImpl& policy, CriticImpl& critic, tor
     stats.value_loss /= stats.updates;
     stats.approx_kl /= stats.updates;
     stats.clip_fraction /= stats.updates;
+    stats.teacher_loss /= stats.updates;
   }
   return stats;
 }

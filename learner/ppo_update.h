@@ -27,6 +27,11 @@ struct PpoSettings {
   // [sample_size]: 1 where PPO samples, 0 where the policy acts on its mean (frozen parts, see
   // TrainerConfig::frozen_parts_act_on_mean); undefined: every dim is sampled.
   torch::Tensor sampled_dims;
+  // Behaviour cloning of a reach teacher (reach_teacher.h): the loss adds teacher_weight × the
+  // teacher loss of the head's mean z against PpoBatch::teacher_z over the parts marked 1 in
+  // teacher_parts ([P]). 0: no teacher.
+  double teacher_weight = 0;
+  torch::Tensor teacher_parts;
 };
 
 // Data-parallel learners (data_parallel.h): called after every minibatch's backward pass (with
@@ -39,10 +44,12 @@ using GradientAverager = std::function<absl::StatusOr<bool>(const std::vector<to
 // ([N, sample_size]), and the behaviour's log-probabilities, values, advantages and returns.
 struct PpoBatch {
   torch::Tensor obs, samples, old_log_prob, old_values, advantages, returns;
+  torch::Tensor teacher_z;  // [N, P, E] with PpoSettings::teacher_weight > 0
 };
 
 struct PpoUpdateStats {
   double policy_loss = 0, value_loss = 0, approx_kl = 0, clip_fraction = 0;  // means over the steps taken
+  double teacher_loss = 0;  // unweighted, mean over the steps taken (0 without a teacher)
   int updates = 0;          // minibatch steps taken
   int skipped_updates = 0;  // minibatches skipped for a non-finite loss, plus 1 for a rollback
   bool rolled_back = false;  // non-finite weights after the update: the weights it started from are back

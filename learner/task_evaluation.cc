@@ -71,8 +71,8 @@ absl::Status CopyTaskPolicy(const ExportedPolicy& exported, ModSkillPolicyImpl& 
   return absl::OkStatus();
 }
 
-// How one run picks z, [n, P, E], from the normalized observation.
-using ZSource = std::function<torch::Tensor(const torch::Tensor& normalized_obs)>;
+// How one run picks z, [n, P, E], from the observation (raw and normalized).
+using ZSource = std::function<torch::Tensor(const torch::Tensor& raw_obs, const torch::Tensor& normalized_obs)>;
 
 // One episode in each env (the first each env runs) with z from `z_of`; `z_sum` ([P, E]), when
 // given, gathers the z of every step.
@@ -99,7 +99,7 @@ absl::StatusOr<TaskEvaluationRow> RunEpisodes(SimulationClient& client, Imported
     auto obs = WireToTorch(result->obs(), "StepResult.obs", v1::FLOAT32, {n, spec.obs_size()});
     if (!obs.ok()) return obs.status();
     const torch::Tensor normalized = imported.obs_norm->Normalize(*obs);
-    const torch::Tensor z = z_of(normalized);
+    const torch::Tensor z = z_of(*obs, normalized);
     if (z_sum != nullptr) *z_sum += z.sum(0);
     const torch::Tensor actions = imported.policy->ControllerActions(normalized, z).contiguous();
     if (absl::Status status = (*stream)->Step(actions.data_ptr<float>()); !status.ok()) return status;
@@ -172,13 +172,13 @@ absl::StatusOr<TaskEvaluationReport> EvaluateTaskPolicy(SimulationClient& client
   report.episode_steps = TaskEpisodeSteps(options.session.max_episode_steps());
   torch::Tensor z_sum = torch::zeros({parts, embed});
   auto trained = RunEpisodes(client, imported, options, "task policy (deterministic)",
-                             [&](const torch::Tensor& obs) { return policy.skills(obs).z; }, &z_sum);
+                             [&](const torch::Tensor&, const torch::Tensor& obs) { return policy.skills(obs).z; }, &z_sum);
   if (!trained.ok()) return trained.status();
   report.rows.push_back(*trained);
   if (!options.baselines) return report;
   torch::Generator generator = at::detail::createCPUGenerator(options.seed);
   auto random = RunEpisodes(client, imported, options, "random unit z per part, every step",
-                            [&](const torch::Tensor& obs) {
+                            [&](const torch::Tensor&, const torch::Tensor& obs) {
                               return SkillAttentionImpl::NormalizeToSphere(
                                   torch::randn({obs.size(0), parts, embed}, generator));
                             },
@@ -187,19 +187,31 @@ absl::StatusOr<TaskEvaluationReport> EvaluateTaskPolicy(SimulationClient& client
   report.rows.push_back(*random);
   const torch::Tensor mean_z = SkillAttentionImpl::NormalizeToSphere(z_sum);  // the direction of the mean z
   auto constant = RunEpisodes(client, imported, options, "constant z (the task policy's mean z per part)",
-                              [&](const torch::Tensor& obs) { return mean_z.expand({obs.size(0), parts, embed}); },
+                              [&](const torch::Tensor&, const torch::Tensor& obs) { return mean_z.expand({obs.size(0), parts, embed}); },
                               nullptr);
   if (!constant.ok()) return constant.status();
   report.rows.push_back(*constant);
   if (!policy.uses_skill_prior()) return report;
   // What the head adds to the prior: the same skills on the prior's z alone.
   auto prior = RunEpisodes(client, imported, options, "the skill prior alone (zero displacement)",
-                           [&](const torch::Tensor& obs) {
+                           [&](const torch::Tensor&, const torch::Tensor& obs) {
                              return policy.TaskZ(obs, torch::zeros({obs.size(0), parts * embed}));
                            },
                            nullptr);
   if (!prior.ok()) return prior.status();
   report.rows.push_back(*prior);
+  if (options.teacher == nullptr) return report;
+  const NetworkLayout& layout = policy.layout();
+  const torch::Tensor supervised = options.teacher_parts.view({1, parts, 1});
+  auto teacher = RunEpisodes(client, imported, options, "the teacher (nearest held pose's z; prior elsewhere)",
+                             [&](const torch::Tensor& raw, const torch::Tensor& obs) {
+                               const torch::Tensor goals = raw.slice(1, layout.goal_start, layout.goal_start + 3);
+                               const torch::Tensor prior_z = policy.TaskZ(obs, torch::zeros({obs.size(0), parts * embed}));
+                               return supervised * options.teacher->NearestZ(goals) + (1 - supervised) * prior_z;
+                             },
+                             nullptr);
+  if (!teacher.ok()) return teacher.status();
+  report.rows.push_back(*teacher);
   return report;
 }
 

@@ -16,6 +16,7 @@
 #include "client/cpp/simulation_client.h"
 #include "learner/model_config.h"
 #include "learner/modskill_policy.h"
+#include "learner/reach_teacher.h"
 #include "learner/running_mean_std.h"
 
 namespace modskill::learner {
@@ -53,6 +54,10 @@ struct TaskEvaluationOptions {
   uint64_t seed = 1;
   bool baselines = true;      // (b) and (c) beside (a)
   int max_steps = 100000;     // a session step limit, against episodes that never end
+  // Reach: a row for the teacher itself (--task_teacher): its nearest held pose's z on
+  // `teacher_parts` ([P], 1 where supervised), the skill prior's on the others.
+  const ReachTeacher* teacher = nullptr;
+  torch::Tensor teacher_parts;
 };
 
 absl::StatusOr<TaskEvaluationReport> EvaluateTaskPolicy(SimulationClient& client, ImportedTaskPolicy& imported,

@@ -25,6 +25,7 @@
 #include "learner/held_noise.h"
 #include "learner/modskill_policy.h"
 #include "learner/ppo_update.h"
+#include "learner/reach_teacher.h"
 #include "learner/running_mean_std.h"
 #include "learner/server_pool.h"
 #include "learner/skill_library.h"
@@ -48,6 +49,7 @@ struct IterationStats {
   double reward_terms[8] = {};
   double learning_rate = 0;  // the policy and critic step size of this iteration's update
   double policy_loss = 0, value_loss = 0, approx_kl = 0, clip_fraction = 0;
+  double teacher_weight = 0, teacher_loss = 0;  // --task_teacher: this update's weight, its unweighted loss
   double discriminator_loss = 0, expert_logit = 0, policy_logit = 0, gradient_penalty = 0;
   int live_sessions = 0;
   int skipped_updates = 0;  // minibatches skipped for a non-finite loss
@@ -239,6 +241,8 @@ class Trainer {
   // and 0 over the frozen parts'; with --task_parts, 1 over those parts' z (task_parts.h);
   // undefined otherwise (every dim is sampled).
   torch::Tensor sampled_dims_;
+  std::optional<ReachTeacher> teacher_;  // --task_teacher
+  torch::Tensor teacher_parts_;          // its supervised parts, [P]
   int64_t policy_version_ = 0;         // policy updates so far
   ActingNetworks snapshot_;            // the weights a collection during the update acts with
   std::future<std::shared_ptr<Collection>> pending_;  // that collection

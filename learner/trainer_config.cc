@@ -95,6 +95,15 @@ absl::Status ValidateTask(const TrainerConfig& c) {
     return absl::InvalidArgumentError(
         "--task_parts: needs --task_skill_prior (the parts left out play the prior's z; without it they have none)");
   }
+  if (!c.task_teacher.empty() && c.task != "reach") {
+    return absl::InvalidArgumentError(absl::StrCat("--task_teacher: reach only, not with --task ", c.task));
+  }
+  if (!(std::isfinite(c.task_teacher_weight) && c.task_teacher_weight >= 0 && c.task_teacher_weight <= 100)) {
+    return absl::InvalidArgumentError(absl::StrCat("--task_teacher_weight: ", c.task_teacher_weight, " must be in [0, 100]"));
+  }
+  if (c.task_teacher_steps < 0) {
+    return absl::InvalidArgumentError(absl::StrCat("--task_teacher_steps: ", c.task_teacher_steps, " must be >= 0"));
+  }
   return ValidateTaskSettings(c);
 }
 
@@ -330,6 +339,11 @@ std::string TrainerConfig::ToJson() const {
     json["task_log_std"] = model.task_log_std;
     json["task_skill_prior"] = model.task_skill_prior;
     if (!task_parts.empty()) json["task_parts"] = task_parts;
+    if (!task_teacher.empty()) {
+      json["task_teacher"] = task_teacher;
+      json["task_teacher_weight"] = task_teacher_weight;
+      json["task_teacher_steps"] = task_teacher_steps;
+    }
     json["task_settings"] = {{"min_speed", task_min_speed},
                              {"max_speed", task_max_speed},
                              {"min_goal_interval_s", task_min_goal_interval_s},

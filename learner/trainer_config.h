@@ -99,6 +99,12 @@ struct TrainerConfig {
   // prior's z exactly, without exploration noise, and leave PPO's ratios. Empty: every part (the
   // paper's high level). Needs the skill prior (a part without a head has no other z).
   std::vector<std::string> task_parts;
+  // Reach only: a teacher table of held reach poses (reach_teacher.h, bench/reach_teacher.py) whose
+  // nearest entry's z the PPO update pulls the head's mean z toward, with task_teacher_weight
+  // falling linearly to 0 over task_teacher_steps env steps (0: held). Empty: no teacher.
+  std::string task_teacher;
+  double task_teacher_weight = 1.0;
+  int64_t task_teacher_steps = 0;
 
   // What to learn with.
   ModelConfig model;

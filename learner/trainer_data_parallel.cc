@@ -43,6 +43,7 @@ std::vector<SharedSetting> SharedSettings(const TrainerConfig& c) {
       {"task_log_std", Text(m.task_log_std)},
       {"task_skill_prior", Text(m.task_skill_prior)},
       {"task_parts", absl::StrJoin(c.task_parts, ",")},
+      {"task_teacher", absl::StrCat(c.task_teacher, " ", Text(c.task_teacher_weight), " ", Text(c.task_teacher_steps))},
       {"action_mode", c.action_mode},
       {"residual_scale", Text(c.residual_scale)},
       {"termination_distance", Text(c.termination_distance)},

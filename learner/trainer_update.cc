@@ -113,6 +113,13 @@ absl::Status Trainer::UpdatePolicy(const TrainingBatch& batch, IterationStats* s
   settings.value_coefficient = config_.value_coefficient;
   settings.max_grad_norm = config_.max_grad_norm;
   settings.sampled_dims = sampled_dims_;
+  torch::Tensor teacher_z;
+  if (teacher_) {
+    settings.teacher_weight = stats->teacher_weight =
+        TeacherWeightAt(config_.task_teacher_weight, config_.task_teacher_steps, env_steps_);
+    settings.teacher_parts = teacher_parts_;
+    teacher_z = teacher_->NearestZ(batch.raw_obs.slice(1, layout_.goal_start, layout_.goal_start + layout_.goal_size));
+  }
   if (data_parallel_) {  // every rank steps as often as the smallest batch allows
     const absl::StatusOr<double> steps =
         data_parallel_->AllReduceMin(MinibatchesPerEpoch(batch.obs.size(0), config_.minibatch_size));
@@ -126,7 +133,7 @@ absl::Status Trainer::UpdatePolicy(const TrainingBatch& batch, IterationStats* s
     }
   }
   const PpoBatch ppo{batch.obs, batch.actions, batch.old_log_prob, critic_->NormalizeReturns(batch.old_values),
-                     batch.advantages, critic_->NormalizeReturns(batch.returns)};
+                     batch.advantages, critic_->NormalizeReturns(batch.returns), teacher_z};
   const PpoUpdateStats update = UpdateWithPpo(*policy_, *critic_, *optimizer_, ppo, settings, generator_, Averager());
   if (!update.error.ok()) return update.error;
   stats->skipped_updates += update.skipped_updates;
@@ -141,6 +148,7 @@ absl::Status Trainer::UpdatePolicy(const TrainingBatch& batch, IterationStats* s
     stats->value_loss = update.value_loss;
     stats->approx_kl = update.approx_kl;
     stats->clip_fraction = update.clip_fraction;
+    stats->teacher_loss = update.teacher_loss;
   }
   return UpdateStats(*obs_norm_, batch.raw_obs);
 }

@@ -23,6 +23,7 @@
 #include "learner/policy_export.h"
 #include "learner/policy_import.h"
 #include "learner/ppo_update.h"
+#include "learner/reach_teacher.h"
 #include "learner/running_mean_std.h"
 #include "learner/skill_library.h"
 #include "learner/task_evaluation.h"
@@ -364,6 +365,56 @@ TEST(SkillReuseTest, TaskPartsLeaveTheOtherPartsOnThePrior) {
   const torch::Tensor prior = attention->forward(obs).z, z = policy.skills(obs).z;
   EXPECT_TRUE(torch::allclose(z.slice(1, 0, kArm), prior.slice(1, 0, kArm), 1e-6, 1e-6));
   EXPECT_FALSE(torch::allclose(z.select(1, kArm), prior.select(1, kArm), 1e-6, 1e-6));
+}
+
+// --task_teacher: with no advantage to follow, the teacher's term alone pulls the arm's z onto the
+// teacher's z; the parts outside --task_parts stay on the prior.
+TEST(SkillReuseTest, TheTeacherPullsTheHeadsZTowardItsOwn) {
+  torch::manual_seed(9);
+  TaskNetworks steer = SteerNetworks();
+  ModSkillPolicyImpl& policy = *steer.policy;
+  auto mask = RestrictTaskHeadToParts(policy, {"R_Arm"}, "5part");
+  ASSERT_TRUE(mask.ok()) << mask.status();
+  constexpr int64_t kArm = 4, kParts = 5, kEmbed = 32;
+  Critic critic(kSteerObs, SmallConfig().critic_hidden);
+  torch::optim::Adam optimizer(TrainableParameters(policy, *critic), torch::optim::AdamOptions(1e-3));
+  PpoSettings settings;
+  settings.minibatch_size = 64;
+  settings.sampled_dims = *mask;
+  settings.teacher_weight = 1.0;
+  settings.teacher_parts = torch::zeros({kParts});
+  settings.teacher_parts[kArm] = 1.f;
+  torch::Generator generator = at::detail::createCPUGenerator(9);
+  const torch::Tensor target = SkillAttentionImpl::NormalizeToSphere(torch::randn({1, kParts, kEmbed}));
+  const torch::Tensor probe = torch::randn({32, kSteerObs});
+  const auto arm_distance = [&] {
+    torch::NoGradGuard no_grad;
+    return (policy.skills(probe).z.select(1, kArm) - target.select(1, kArm)).norm(2, -1).mean().item<double>();
+  };
+  const double before = arm_distance();
+  double first_loss = 0, last_loss = 0;
+  for (int iteration = 0; iteration < 10; ++iteration) {
+    PpoBatch batch;
+    batch.obs = torch::randn({256, kSteerObs});
+    torch::NoGradGuard no_grad;
+    const torch::Tensor mean = policy.SampleMean(batch.obs);
+    batch.samples = mean;
+    batch.old_log_prob = ModSkillPolicyImpl::LogProb(mean, policy.log_std(), batch.samples, *mask);
+    batch.old_values = critic->forward(batch.obs);
+    batch.advantages = torch::zeros({256});
+    batch.returns = batch.old_values;
+    batch.teacher_z = target.expand({256, kParts, kEmbed});
+    torch::AutoGradMode grad(true);
+    const PpoUpdateStats stats = UpdateWithPpo(policy, *critic, optimizer, batch, settings, generator);
+    (iteration == 0 ? first_loss : last_loss) = stats.teacher_loss;
+  }
+  EXPECT_GT(first_loss, 0.0);
+  EXPECT_LT(last_loss, 0.5 * first_loss);
+  EXPECT_LT(arm_distance(), 0.5 * before) << "the arm's z did not move toward the teacher's";
+  torch::NoGradGuard no_grad;
+  SkillAttention attention = policy.attention();
+  const torch::Tensor prior = attention->forward(probe).z, z = policy.skills(probe).z;
+  EXPECT_TRUE(torch::allclose(z.slice(1, 0, kArm), prior.slice(1, 0, kArm), 1e-6, 1e-6));
 }
 
 TEST(SkillReuseTest, TaskPartsNameKnownPartsOverAPrior) {

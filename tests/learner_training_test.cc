@@ -493,6 +493,10 @@ TEST(LearnerTrainingTest, BadConfigurationsAreClearErrors) {
       {[](TrainerConfig* c) { c->task_reach_center = {0, 0, 0.5}; }, "--task_reach_center"},  // 2 m box underground
       {[](TrainerConfig* c) { c->task_reach_box_size = 3, c->task_reach_center = {2, 0, 1.5}; }, "--task_reach_center"},
       {[](TrainerConfig* c) { c->task_parts = {"R_Arm"}; }, "--task_parts"},  // tracking has no task head
+      {[](TrainerConfig* c) { c->task_teacher = "teacher.txt"; }, "--task_teacher: reach only"},
+      {[](TrainerConfig* c) { c->task_teacher_weight = -1; }, "--task_teacher_weight"},
+      {[&](TrainerConfig* c) { c->task_teacher_weight = nan; }, "--task_teacher_weight"},
+      {[](TrainerConfig* c) { c->task_teacher_steps = -5; }, "--task_teacher_steps"},
       // The server's bounds on the settings the server would use (its defaults where a flag is 0).
       {[](TrainerConfig* c) { c->task_min_speed = -1; }, "--task_min_speed"},
       {[](TrainerConfig* c) { c->task_min_speed = 4; }, "min_speed = 4"},  // above the server's default 3 m/s

@@ -97,6 +97,13 @@ ABSL_FLAG(bool, task_skill_prior, true,
 ABSL_FLAG(std::vector<std::string>, task_parts, {},
           "--task steer|reach|strike: the parts whose z the task head displaces, e.g. R_Arm for reach; the others play "
           "the skill prior's z without exploration noise (default: every part, the paper's high level)");
+ABSL_FLAG(std::string, task_teacher, "",
+          "--task reach: a teacher table of held reach poses (bench/reach_teacher.py); the update pulls the head's "
+          "mean z toward the z of the pose nearest each goal (behaviour cloning); with --eval, a row for the teacher "
+          "itself");
+ABSL_FLAG(double, task_teacher_weight, 1.0, "--task_teacher: weight of its loss beside PPO's, in [0, 100]");
+ABSL_FLAG(int64_t, task_teacher_steps, 0,
+          "--task_teacher: env steps over which its weight falls linearly to 0 (0: held for the whole run)");
 ABSL_FLAG(std::vector<std::string>, task_hidden, {},
           "--task: hidden sizes of the task head, e.g. 2048,1024,512 (default: the preset's; small 256,128)");
 ABSL_FLAG(std::vector<std::string>, controller_hidden, {},
@@ -340,6 +347,21 @@ absl::StatusOr<TaskEvaluationReport> EvaluateTaskFromFlags(SimulationClient& cli
     if (absl::Status status = skills->CheckFits(*described, task_spec); !status.ok()) return status;
     if (absl::Status status = skills->CheckSameControllers(*imported->policy); !status.ok()) return status;
   }
+  std::optional<ReachTeacher> teacher;
+  if (const std::string path = absl::GetFlag(FLAGS_task_teacher); !path.empty()) {
+    if (task != "reach" || !imported->policy->uses_skill_prior() || !options.baselines) {
+      return absl::InvalidArgumentError("--task_teacher: with --eval, only for a reach policy with a skill prior and --task_baselines");
+    }
+    auto loaded = ReachTeacher::Load(path);
+    if (!loaded.ok()) return loaded.status();
+    std::vector<std::string> parts;
+    for (const PartSlices& part : imported->policy->layout().parts) parts.push_back(part.name);
+    auto mask = loaded->PartMask(parts, imported->policy->config().embed_dim, absl::GetFlag(FLAGS_task_parts));
+    if (!mask.ok()) return mask.status();
+    teacher = *std::move(loaded);
+    options.teacher = &*teacher;
+    options.teacher_parts = *std::move(mask);
+  }
   LogLine("evaluating %s on %s, task %s, %d episodes per run", checkpoint, client.server(), task, options.episodes);
   return EvaluateTaskPolicy(client, *imported, checkpoint, options);
 }
@@ -394,6 +416,9 @@ absl::Status TaskFromFlags(TrainerConfig* config) {
   config->model.task_log_std = absl::GetFlag(FLAGS_task_log_std);
   config->model.task_skill_prior = absl::GetFlag(FLAGS_task_skill_prior);
   config->task_parts = absl::GetFlag(FLAGS_task_parts);
+  config->task_teacher = absl::GetFlag(FLAGS_task_teacher);
+  config->task_teacher_weight = absl::GetFlag(FLAGS_task_teacher_weight);
+  config->task_teacher_steps = absl::GetFlag(FLAGS_task_teacher_steps);
   config->loop_clips = absl::GetFlag(FLAGS_loop_clips);
   config->anchor_reference = absl::GetFlag(FLAGS_anchor_reference);
   config->init_from = absl::GetFlag(FLAGS_init_from);
@@ -511,6 +536,7 @@ std::vector<std::string> ProgressColumns(const Trainer& trainer) {
     columns.push_back(column);
   }
   if (!IsTrackingTask(trainer.config().task)) columns.push_back("normalized_return");
+  if (!trainer.config().task_teacher.empty()) columns.insert(columns.end(), {"teacher_weight", "teacher_loss"});
   if (trainer.config().data_parallel.world_size > 1) columns.insert(columns.end(), {"allreduce_s", "allreduce_bytes"});
   return columns;
 }
@@ -525,6 +551,7 @@ std::vector<double> ProgressRow(const IterationStats& s, double elapsed, const T
                          s.termination_distance, s.tracked_share, s.collect_seconds, s.update_seconds,
                          double(s.policy_lag), s.learning_rate});
   if (!IsTrackingTask(trainer.config().task)) row.push_back(s.normalized_return);
+  if (!trainer.config().task_teacher.empty()) row.insert(row.end(), {s.teacher_weight, s.teacher_loss});
   if (trainer.config().data_parallel.world_size > 1) row.insert(row.end(), {s.allreduce_seconds, double(s.allreduce_bytes)});
   return row;
 }
