@@ -61,9 +61,14 @@ for i in "${!NAMES[@]}"; do
   # The goals it trained on (speeds, intervals, reach's box) are the goals it is evaluated on.
   goal_flags=$(grep -oE -- '--task_(min_speed|max_speed|min_goal_interval_s|max_goal_interval_s|reach_box_size|reach_center)[ =][^ ]+' \
       <<< "${FLAGS[$i]}" | tr '\n' ' ' || true)
+  # A reach head trained with a teacher is evaluated beside the teacher itself, on its parts.
+  teacher_flags=""
+  if grep -qE -- '--task_teacher[ =]' <<< "${FLAGS[$i]}"; then
+    teacher_flags=$(grep -oE -- '--task_(teacher|parts)[ =][^ ]+' <<< "${FLAGS[$i]}" | tr '\n' ' ')
+  fi
   "$BUILD/learner/modskill-learner" --eval --task "$task" --checkpoint "$OUT/$name/policy.pt" \
       --skills "${SKILLS_FOR[$name]:-$SKILLS}" \
-      --servers "127.0.0.1:${PORTS[$i]}" --task_baselines --eval_episodes "$EPISODES" --seed 7 $goal_flags \
+      --servers "127.0.0.1:${PORTS[$i]}" --task_baselines --eval_episodes "$EPISODES" --seed 7 $goal_flags $teacher_flags \
       ${MOTIONS:+--motions "$MOTIONS"} --eval_out "$OUT/$name/eval" > "$OUT/$name/eval.log" 2>&1
   { echo "### $name"; cat "$OUT/$name/eval/eval.md"; echo; } 
 done | tee "$OUT/table.md"
