@@ -163,6 +163,8 @@ TEST(ReachTeacherTest, AReachRunTrainsWithTheTeacherAndEvaluatesIt) {
   EXPECT_EQ(history[1].teacher_loss, 0.0) << "no pull at weight 0";
 
   auto client = ConnectTo(*server);
+  auto imported = ImportTaskPolicy(dir + "/policy.pt", (*trainer)->spec());
+  ASSERT_TRUE(imported.ok()) << imported.status();
   TaskEvaluationOptions options;
   options.session.set_task("reach");
   options.session.add_motions("deepmimic_walk");
@@ -170,14 +172,6 @@ TEST(ReachTeacherTest, AReachRunTrainsWithTheTeacherAndEvaluatesIt) {
   options.session.set_residual_scale(static_cast<float>(config.residual_scale));
   options.session.set_max_episode_steps(20);
   options.episodes = 4;
-  v1::SessionConfig probe = options.session;
-  probe.set_num_envs(1);
-  auto stream = client->OpenSession(probe);
-  ASSERT_TRUE(stream.ok()) << stream.status();
-  const v1::EnvSpec task_spec = (*stream)->spec();
-  (void)(*stream)->Close();
-  auto imported = ImportTaskPolicy(dir + "/policy.pt", task_spec);
-  ASSERT_TRUE(imported.ok()) << imported.status();
   auto teacher = ReachTeacher::Load(config.task_teacher);
   ASSERT_TRUE(teacher.ok());
   options.teacher = &*teacher;

@@ -98,6 +98,13 @@ TEST(ReachPoseTest, RefusesBodiesOffTheHandsChainAndBadNames) {
   auto not_finite = MakeReachPose(spec, walk, request);
   ASSERT_FALSE(not_finite.ok());
   EXPECT_NE(not_finite.status().message().find("target is not finite"), std::string::npos) << not_finite.status();
+  MotionClip one_frame = walk;
+  one_frame.num_frames = 1;
+  auto too_short = MakeReachPose(spec, one_frame, RightArmRequest(Vec3(0.3, -0.3, 1.2)));
+  ASSERT_FALSE(too_short.ok());
+  EXPECT_NE(too_short.status().message().find("reach pose: clip 'deepmimic_walk' has 24 bodies and 1 frames"),
+            std::string::npos)
+      << too_short.status();
 }
 
 }  // namespace

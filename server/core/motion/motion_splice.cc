@@ -6,6 +6,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
+#include "server/core/motion/clip_fits_skeleton.h"
 #include "server/core/motion/clip_name.h"
 
 namespace modskill {
@@ -37,11 +38,7 @@ absl::Status CheckInputs(const HumanoidSpec& spec, const MotionClip& base, const
     return status;
   }
   for (const MotionClip* clip : {&base, &source}) {
-    if (clip->num_bodies != spec.num_bodies() || clip->num_frames < 2) {
-      return absl::InvalidArgumentError(absl::StrCat("splice: clip '", clip->name, "' has ", clip->num_bodies,
-                                                     " bodies and ", clip->num_frames, " frames; the skeleton has ",
-                                                     spec.num_bodies(), " bodies and a clip needs 2 frames"));
-    }
+    if (absl::Status fits = CheckClipFitsSkeleton(spec, *clip, "splice"); !fits.ok()) return fits;
   }
   if (std::abs(base.fps - source.fps) > 1e-9) {
     return absl::InvalidArgumentError(absl::StrCat("splice: clip '", source.name, "' runs at ", source.fps,

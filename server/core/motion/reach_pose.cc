@@ -5,6 +5,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "server/core/motion/clip_fits_skeleton.h"
 #include "server/core/motion/clip_name.h"
 #include "server/core/motion/motion_splice.h"
 #include "server/core/sim/heading_frame.h"
@@ -25,11 +26,7 @@ absl::Status CheckInputs(const HumanoidSpec& spec, const MotionClip& base, const
       !status.ok()) {
     return status;
   }
-  if (base.num_bodies != spec.num_bodies() || base.num_frames < 2) {
-    return absl::InvalidArgumentError(absl::StrCat("reach pose: clip '", base.name, "' has ", base.num_bodies,
-                                                   " bodies and ", base.num_frames, " frames; the skeleton has ",
-                                                   spec.num_bodies(), " bodies and a clip needs 2 frames"));
-  }
+  if (absl::Status fits = CheckClipFitsSkeleton(spec, base, "reach pose"); !fits.ok()) return fits;
   if (request.hand <= 0 || request.hand >= spec.num_bodies()) {
     return absl::InvalidArgumentError(absl::StrCat("reach pose: hand body index ", request.hand,
                                                    " is not a non-root body of the skeleton"));
