@@ -81,13 +81,19 @@ absl::StatusOr<ReachTeacher> ReachTeacher::Load(const std::string& path) {
   return Parse(*text, absl::StrCat("--task_teacher ", path));
 }
 
-absl::StatusOr<torch::Tensor> ReachTeacher::PartMask(const std::vector<std::string>& layout_parts, int64_t embed_dim,
+absl::StatusOr<torch::Tensor> ReachTeacher::PartMask(const NetworkLayout& layout, int64_t embed_dim,
                                                      const std::vector<std::string>& task_parts) const {
+  std::vector<std::string> layout_parts;
+  for (const PartSlices& part : layout.parts) layout_parts.push_back(part.name);
   if (parts_ != layout_parts || z_.size(2) != embed_dim) {
     return absl::FailedPreconditionError(absl::StrCat(
         "--task_teacher: its z are for parts (", absl::StrJoin(parts_, ","), ") of ", z_.size(2),
         " dims, the skills' for (", absl::StrJoin(layout_parts, ","), ") of ", embed_dim,
         " (make it from these skills with bench/reach_teacher.py)"));
+  }
+  if (layout.goal_size != 3) {
+    return absl::FailedPreconditionError(absl::StrCat("--task_teacher: the task's goal has ", layout.goal_size,
+                                                      " features, the teacher reads 3 (a target point)"));
   }
   torch::Tensor mask = torch::zeros({static_cast<int64_t>(parts_.size())});
   for (size_t p = 0; p < parts_.size(); ++p) {

@@ -14,6 +14,7 @@
 #include <torch/torch.h>
 
 #include "absl/status/statusor.h"
+#include "learner/model_config.h"
 
 namespace modskill::learner {
 
@@ -31,8 +32,9 @@ class ReachTeacher {
 
   // The supervised parts as a mask over the policy's parts [P]: `task_parts` (all parts when empty).
   // FAILED_PRECONDITION naming --task_teacher when the teacher's parts or embed_dim are not the
-  // policy's (`layout_parts`, `embed_dim`): it was made from other skills.
-  absl::StatusOr<torch::Tensor> PartMask(const std::vector<std::string>& layout_parts, int64_t embed_dim,
+  // policy's (`layout`'s parts, `embed_dim`: it was made from other skills), or when the layout's
+  // goal is not a point (3 features).
+  absl::StatusOr<torch::Tensor> PartMask(const NetworkLayout& layout, int64_t embed_dim,
                                          const std::vector<std::string>& task_parts) const;
 
   // goals [N, 3] (the reach goal: target − root, heading frame) -> the nearest entries' z [N, P, E].

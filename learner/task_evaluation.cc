@@ -193,11 +193,11 @@ absl::StatusOr<TaskEvaluationReport> EvaluateTaskPolicy(SimulationClient& client
   report.rows.push_back(*constant);
   if (!policy.uses_skill_prior()) return report;
   // What the head adds to the prior: the same skills on the prior's z alone.
+  const auto prior_z = [&](const torch::Tensor& obs) {
+    return policy.TaskZ(obs, torch::zeros({obs.size(0), parts * embed}));
+  };
   auto prior = RunEpisodes(client, imported, options, "the skill prior alone (zero displacement)",
-                           [&](const torch::Tensor&, const torch::Tensor& obs) {
-                             return policy.TaskZ(obs, torch::zeros({obs.size(0), parts * embed}));
-                           },
-                           nullptr);
+                           [&](const torch::Tensor&, const torch::Tensor& obs) { return prior_z(obs); }, nullptr);
   if (!prior.ok()) return prior.status();
   report.rows.push_back(*prior);
   if (options.teacher == nullptr) return report;
@@ -205,9 +205,8 @@ absl::StatusOr<TaskEvaluationReport> EvaluateTaskPolicy(SimulationClient& client
   const torch::Tensor supervised = options.teacher_parts.view({1, parts, 1});
   auto teacher = RunEpisodes(client, imported, options, "the teacher (nearest held pose's z; prior elsewhere)",
                              [&](const torch::Tensor& raw, const torch::Tensor& obs) {
-                               const torch::Tensor goals = raw.slice(1, layout.goal_start, layout.goal_start + 3);
-                               const torch::Tensor prior_z = policy.TaskZ(obs, torch::zeros({obs.size(0), parts * embed}));
-                               return supervised * options.teacher->NearestZ(goals) + (1 - supervised) * prior_z;
+                               const torch::Tensor goals = raw.slice(1, layout.goal_start, layout.goal_start + layout.goal_size);
+                               return supervised * options.teacher->NearestZ(goals) + (1 - supervised) * prior_z(obs);
                              },
                              nullptr);
   if (!teacher.ok()) return teacher.status();

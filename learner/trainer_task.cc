@@ -67,14 +67,8 @@ absl::Status Trainer::LoadSkills() {
   if (!config_.task_teacher.empty()) {
     auto teacher = ReachTeacher::Load(config_.task_teacher);
     if (!teacher.ok()) return teacher.status();
-    std::vector<std::string> parts;
-    for (const PartSlices& part : policy_->layout().parts) parts.push_back(part.name);
-    auto mask = teacher->PartMask(parts, policy_->config().embed_dim, config_.task_parts);
+    auto mask = teacher->PartMask(policy_->layout(), policy_->config().embed_dim, config_.task_parts);
     if (!mask.ok()) return mask.status();
-    if (policy_->layout().goal_size != 3) {
-      return absl::FailedPreconditionError(absl::StrCat("--task_teacher: the reach goal has ", policy_->layout().goal_size,
-                                                        " features, the teacher reads 3 (a target point)"));
-    }
     teacher_ = *std::move(teacher);
     teacher_parts_ = *std::move(mask);
     LogLine("task reach: teacher of %d held poses from %s, weight %g%s", static_cast<int>(teacher_->size()),

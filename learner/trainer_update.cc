@@ -118,7 +118,9 @@ absl::Status Trainer::UpdatePolicy(const TrainingBatch& batch, IterationStats* s
     settings.teacher_weight = stats->teacher_weight =
         TeacherWeightAt(config_.task_teacher_weight, config_.task_teacher_steps, env_steps_);
     settings.teacher_parts = teacher_parts_;
-    teacher_z = teacher_->NearestZ(batch.raw_obs.slice(1, layout_.goal_start, layout_.goal_start + layout_.goal_size));
+    if (settings.teacher_weight > 0) {  // faded out: no pull, no lookup
+      teacher_z = teacher_->NearestZ(batch.raw_obs.slice(1, layout_.goal_start, layout_.goal_start + layout_.goal_size));
+    }
   }
   if (data_parallel_) {  // every rank steps as often as the smallest batch allows
     const absl::StatusOr<double> steps =

@@ -47,21 +47,32 @@ TEST(ReachTeacherTest, GivesTheUnitZOfTheHeldPoseNearestEachGoal) {
   EXPECT_TRUE(torch::equal(z[2], high)) << "an unreachable goal takes the nearest pose";
 }
 
+// A reach layout's parts (names only) and its goal, a point.
+NetworkLayout LayoutOf(const std::vector<std::string>& parts, int64_t goal_size = 3) {
+  NetworkLayout layout;
+  for (const std::string& name : parts) layout.parts.push_back(PartSlices{name});
+  layout.goal_size = goal_size;
+  return layout;
+}
+
 TEST(ReachTeacherTest, SupervisesTheTaskPartsOfTheSameSkillsOnly) {
   auto teacher = ReachTeacher::Parse(kTable, "t.txt");
   ASSERT_TRUE(teacher.ok());
-  auto all = teacher->PartMask({"Arm", "Leg"}, 2, {});
+  auto all = teacher->PartMask(LayoutOf({"Arm", "Leg"}), 2, {});
   ASSERT_TRUE(all.ok()) << all.status();
   EXPECT_TRUE(torch::equal(*all, torch::tensor({1.f, 1.f})));
-  auto arm = teacher->PartMask({"Arm", "Leg"}, 2, {"Arm"});
+  auto arm = teacher->PartMask(LayoutOf({"Arm", "Leg"}), 2, {"Arm"});
   ASSERT_TRUE(arm.ok());
   EXPECT_TRUE(torch::equal(*arm, torch::tensor({1.f, 0.f})));
   for (const auto& [parts, embed] : {std::pair<std::vector<std::string>, int64_t>{{"Arm", "Leg"}, 32},
                                      std::pair<std::vector<std::string>, int64_t>{{"Leg", "Arm"}, 2}}) {
-    auto other = teacher->PartMask(parts, embed, {});
+    auto other = teacher->PartMask(LayoutOf(parts), embed, {});
     EXPECT_EQ(other.status().code(), absl::StatusCode::kFailedPrecondition);
     EXPECT_THAT(other.status().message(), HasSubstr("--task_teacher: its z are for parts (Arm,Leg) of 2 dims"));
   }
+  auto not_a_point = teacher->PartMask(LayoutOf({"Arm", "Leg"}, 934), 2, {});
+  EXPECT_EQ(not_a_point.status().code(), absl::StatusCode::kFailedPrecondition);
+  EXPECT_THAT(not_a_point.status().message(), HasSubstr("--task_teacher: the task's goal has 934 features"));
 }
 
 TEST(ReachTeacherTest, LossIsTheSquaredDistanceOverTheSupervisedParts) {

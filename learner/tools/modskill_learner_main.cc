@@ -354,9 +354,8 @@ absl::StatusOr<TaskEvaluationReport> EvaluateTaskFromFlags(SimulationClient& cli
     }
     auto loaded = ReachTeacher::Load(path);
     if (!loaded.ok()) return loaded.status();
-    std::vector<std::string> parts;
-    for (const PartSlices& part : imported->policy->layout().parts) parts.push_back(part.name);
-    auto mask = loaded->PartMask(parts, imported->policy->config().embed_dim, absl::GetFlag(FLAGS_task_parts));
+    auto mask = loaded->PartMask(imported->policy->layout(), imported->policy->config().embed_dim,
+                                 absl::GetFlag(FLAGS_task_parts));
     if (!mask.ok()) return mask.status();
     teacher = *std::move(loaded);
     options.teacher = &*teacher;
