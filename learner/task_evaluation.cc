@@ -89,6 +89,7 @@ absl::StatusOr<TaskEvaluationRow> RunEpisodes(SimulationClient& client, Imported
   const TaskReturn task_return({spec.reward_terms().begin(), spec.reward_terms().end()}, config.max_episode_steps());
   std::vector<double> goal(n, 0.0), length(n, 0.0);
   std::vector<bool> ended(n, false);
+  EpisodeEnds ends;
   int remaining = n;
   const v1::StepResult* result = &(*stream)->opened().initial();
   torch::NoGradGuard no_grad;
@@ -106,20 +107,25 @@ absl::StatusOr<TaskEvaluationRow> RunEpisodes(SimulationClient& client, Imported
     result = &(*stream)->result();
     auto terms = WireToTorch(result->reward_terms(), "StepResult.reward_terms", v1::FLOAT32, {n, spec.reward_terms_size()});
     auto done = WireToTorch(result->done(), "StepResult.done", v1::UINT8, {n});
+    auto causes = ReadEndCauses(*result, n);
     if (!terms.ok()) return terms.status();
     if (!done.ok()) return done.status();
+    if (!causes.ok()) return causes.status();
     const torch::Tensor goal_reward = task_return.GoalReward(*terms).contiguous();
     for (int i = 0; i < n; ++i) {
       if (ended[i]) continue;
       goal[i] += goal_reward.data_ptr<double>()[i];
       length[i] += 1;
-      if (done->data_ptr<float>()[i] > 0.5f) ended[i] = true, --remaining;
+      if (done->data_ptr<float>()[i] > 0.5f) {
+        ended[i] = true, --remaining;
+        ends.Add(causes->empty() ? v1::END_CAUSE_UNSPECIFIED : (*causes)[i]);
+      }
     }
   }
   (void)(*stream)->Close();
   std::vector<double> returns;
   for (double g : goal) returns.push_back(task_return.Normalize(g));
-  return TaskEvaluationRow{name, MeanOrNan(returns), MeanOrNan(length), n};
+  return TaskEvaluationRow{name, MeanOrNan(returns), MeanOrNan(length), n, ends};
 }
 
 }  // namespace
@@ -220,10 +226,15 @@ std::string TaskEvaluationReport::ToJson() const {
   json["checkpoint"] = checkpoint;
   json["normalized_by_steps"] = episode_steps;
   for (const TaskEvaluationRow& row : rows) {
+    nlohmann::json ended_by = nlohmann::json::object();
+    const std::vector<std::string> names = EpisodeEnds::Names();
+    const std::vector<double> counts = row.ends.Counts();
+    for (size_t c = 0; c < names.size(); ++c) ended_by[names[c]] = static_cast<int>(counts[c]);
     json["runs"].push_back({{"z_source", row.z_source},
                             {"mean_normalized_return", row.mean_normalized_return},
                             {"mean_episode_length", row.mean_episode_length},
-                            {"episodes", row.episodes}});
+                            {"episodes", row.episodes},
+                            {"ended_by", ended_by}});
   }
   return json.dump(1);
 }
@@ -232,11 +243,11 @@ std::string TaskEvaluationReport::ToMarkdown() const {
   std::string md = absl::StrFormat(
       "Task %s, %s: the same frozen skills driven by different z. Normalized return: per episode, the sum of the "
       "reward terms other than energy divided by %d steps.\n\n"
-      "| z for the skills | normalized return | episode length (steps) | episodes |\n|---|---|---|---|\n",
+      "| z for the skills | normalized return | episode length (steps) | episodes | ended by |\n|---|---|---|---|---|\n",
       task, checkpoint, episode_steps);
   for (const TaskEvaluationRow& row : rows) {
-    absl::StrAppendFormat(&md, "| %s | %.3f | %.1f | %d |\n", row.z_source, row.mean_normalized_return,
-                          row.mean_episode_length, row.episodes);
+    absl::StrAppendFormat(&md, "| %s | %.3f | %.1f | %d | %s |\n", row.z_source, row.mean_normalized_return,
+                          row.mean_episode_length, row.episodes, row.ends.Summary());
   }
   return md;
 }

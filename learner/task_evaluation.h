@@ -14,6 +14,7 @@
 
 #include "absl/status/statusor.h"
 #include "client/cpp/simulation_client.h"
+#include "learner/episode_ends.h"
 #include "learner/model_config.h"
 #include "learner/modskill_policy.h"
 #include "learner/reach_teacher.h"
@@ -37,6 +38,7 @@ struct TaskEvaluationRow {
   double mean_normalized_return = 0;
   double mean_episode_length = 0;  // steps
   int episodes = 0;
+  EpisodeEnds ends;  // why they ended (empty where the server does not say)
 };
 
 struct TaskEvaluationReport {

@@ -22,6 +22,7 @@
 #include "learner/amp_discriminator.h"
 #include "learner/critic.h"
 #include "learner/data_parallel.h"
+#include "learner/episode_ends.h"
 #include "learner/held_noise.h"
 #include "learner/modskill_policy.h"
 #include "learner/ppo_update.h"
@@ -62,6 +63,7 @@ struct IterationStats {
   // iteration's collection; NaN when none ended (and in tracking runs).
   double normalized_return = std::numeric_limits<double>::quiet_NaN();
   int task_episodes = 0;  // those episodes
+  EpisodeEnds task_ends;  // why they ended
   // Data-parallel runs: this rank's time in, and bytes sent into, collectives this iteration.
   double allreduce_seconds = 0;
   int64_t allreduce_bytes = 0;

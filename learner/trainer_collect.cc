@@ -127,6 +127,8 @@ absl::Status Trainer::RecordStep(SlotRollout& r, int t) {
   for (const auto* tensor : {&reward, &done, &truncated, &amp, &terms}) {
     if (!tensor->ok()) return tensor->status();
   }
+  auto causes = ReadEndCauses(result, r.n);
+  if (!causes.ok()) return causes.status();
   r.task_reward[t].copy_(*reward);
   r.dones[t].copy_(*done);
   held_noise_.EpisodesEnded(slot_index_[r.slot], *done);
@@ -152,7 +154,10 @@ absl::Status Trainer::RecordStep(SlotRollout& r, int t) {
       recent_returns_.push_back(returns[i]);
       recent_lengths_.push_back(lengths[i]);
       recent_tracked_.push_back(truncated_data[i] > 0.5f ? 1.0 : 0.0);
-      if (task_return_) r.normalized_returns.push_back(task_return_->Normalize(goal_returns[i]));
+      if (task_return_) {
+        r.normalized_returns.push_back(task_return_->Normalize(goal_returns[i]));
+        r.ends.Add(causes->empty() ? v1::END_CAUSE_UNSPECIFIED : (*causes)[i]);
+      }
       returns[i] = 0;
       lengths[i] = 0;
       goal_returns[i] = 0;

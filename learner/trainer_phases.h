@@ -27,6 +27,7 @@ struct Trainer::SlotRollout {
   torch::Tensor reward_terms_sum;
   // Task runs: the normalized returns (TaskProgress) of the episodes that ended in this rollout.
   std::vector<double> normalized_returns;
+  EpisodeEnds ends;  // why those episodes ended
 };
 
 // One collection: every live session's rollout, and what it ran under.

@@ -89,7 +89,10 @@ absl::Status Trainer::LoadSkills() {
 void Trainer::SummarizeTaskEpisodes(const Collection& collection, IterationStats* stats) const {
   if (!task_return_) return;
   std::vector<double> ended;
-  for (const SlotRollout& r : collection.rollouts) ended.insert(ended.end(), r.normalized_returns.begin(), r.normalized_returns.end());
+  for (const SlotRollout& r : collection.rollouts) {
+    ended.insert(ended.end(), r.normalized_returns.begin(), r.normalized_returns.end());
+    stats->task_ends.Merge(r.ends);
+  }
   stats->normalized_return = MeanOrNan(ended);
   stats->task_episodes = static_cast<int>(ended.size());
 }

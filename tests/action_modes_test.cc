@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "server/core/env/action_mapping.h"
+#include "server/core/env/episode_end.h"
 #include "tests/test_fixtures.h"
 
 namespace modskill {
@@ -45,14 +46,14 @@ TEST(ActionMappingTest, ResidualZeroIsTheReferencePoseClampedToTheRange) {
   std::vector<float> action(spec.action_size, 0.f);
   std::vector<double> targets(humanoid.num_hinges(), std::nan(""));
   ActionMapping residual{ActionMode::kResidual, 0.5};
-  MapActionToPdTargets(residual, humanoid, spec, action.data(), reference, targets.data());
+  MapActionToPdTargets(residual, humanoid, spec, action.data(), reference, nullptr, targets.data());
   for (int h = 0; h < humanoid.num_hinges(); ++h) {
     const BodySpec& body = humanoid.spec().body(1 + h / 3);
     EXPECT_DOUBLE_EQ(targets[h], std::clamp(reference[h], body.range_low[h % 3], body.range_high[h % 3])) << h;
   }
   // A full action moves each target by residual_scale x the hinge's action scale (inside the range).
   std::fill(action.begin(), action.end(), 0.2f);
-  MapActionToPdTargets(residual, humanoid, spec, action.data(), reference, targets.data());
+  MapActionToPdTargets(residual, humanoid, spec, action.data(), reference, nullptr, targets.data());
   int inside = 0;
   for (int a = 0; a < spec.action_size; ++a) {
     const int h = spec.action_hinge[a];
@@ -68,7 +69,7 @@ TEST(ActionMappingTest, ResidualZeroIsTheReferencePoseClampedToTheRange) {
   std::fill(action.begin(), action.end(), 1.0f);
   ActionMapping unclamped = residual;
   unclamped.clamp_to_joint_range = false;
-  MapActionToPdTargets(unclamped, humanoid, spec, action.data(), reference, targets.data());
+  MapActionToPdTargets(unclamped, humanoid, spec, action.data(), reference, nullptr, targets.data());
   int beyond = 0;
   for (int a = 0; a < spec.action_size; ++a) {
     const int h = spec.action_hinge[a];
@@ -78,11 +79,38 @@ TEST(ActionMappingTest, ResidualZeroIsTheReferencePoseClampedToTheRange) {
   EXPECT_GT(beyond, 0);
   // Absolute mode ignores the reference: offset + scale * a.
   std::fill(action.begin(), action.end(), 0.2f);
-  MapActionToPdTargets(ActionMapping{}, humanoid, spec, action.data(), reference, targets.data());
+  MapActionToPdTargets(ActionMapping{}, humanoid, spec, action.data(), reference, nullptr, targets.data());
   for (int a = 0; a < spec.action_size; ++a) {
     const int h = spec.action_hinge[a];
     EXPECT_NEAR(targets[h], humanoid.action_offset()[h] + humanoid.action_scale()[h] * 0.2, 1e-6);
   }
+}
+
+TEST(ActionMappingTest, DampingToTheReferenceRateLeadsResidualTargetsByKdOverKpTimesTheRate) {
+  EnvBatchConfig config = OneEnv(ActionMode::kResidual);
+  config.physics.damp_to_reference_rate = true;
+  auto batch = MakeBatch(config);
+  ASSERT_NE(batch, nullptr);
+  const HumanoidModel& humanoid = batch->humanoid();
+  const MotionClip& clip = batch->motions().clip(batch->motions().Find("deepmimic_walk"));
+  const size_t frame = static_cast<size_t>(7) * clip.num_hinges();
+  const double* reference = &clip.dof_pos[frame];
+  const double* rate = &clip.dof_vel[frame];
+  const std::vector<float> zeros(batch->spec().action_size, 0.f);
+  std::vector<double> targets(humanoid.num_hinges(), std::nan(""));
+  const ActionMapping residual{ActionMode::kResidual, 0.5};
+  MapActionToPdTargets(residual, humanoid, batch->spec(), zeros.data(), reference, rate, targets.data());
+  int led = 0;
+  for (int h = 0; h < humanoid.num_hinges(); ++h) {
+    const BodySpec& body = humanoid.spec().body(1 + h / 3);
+    const double lead = humanoid.kd()[h] / humanoid.kp()[h] * rate[h];
+    EXPECT_DOUBLE_EQ(targets[h], std::clamp(reference[h] + lead, body.range_low[h % 3], body.range_high[h % 3])) << h;
+    led += std::abs(lead) > 1e-3 && std::abs(targets[h] - reference[h]) > 1e-3;
+  }
+  EXPECT_GT(led, 10);  // a walk moves many hinges at frame 7
+  // Absolute targets ignore the reference and its rate.
+  MapActionToPdTargets(ActionMapping{}, humanoid, batch->spec(), zeros.data(), reference, rate, targets.data());
+  for (int h : batch->spec().action_hinge) EXPECT_DOUBLE_EQ(targets[h], humanoid.action_offset()[h]) << h;
 }
 
 TEST(ActionMappingTest, NamesAndScalesAreValidated) {
@@ -136,6 +164,7 @@ TEST(TerminationTest, NeverOnTheFirstStepAfterAReset) {
   // ...but not on the first step.
   EXPECT_EQ(StepsUntilDone(*batch, "deepmimic_walk", 3), 2);
   EXPECT_EQ(batch->buffers().truncated[0], 0);
+  EXPECT_EQ(batch->buffers().end_cause[0], static_cast<uint8_t>(EpisodeEnd::kTracking));
 }
 
 TEST(TerminationTest, NoFeetWatchesEveryBodyButAnklesAndToes) {

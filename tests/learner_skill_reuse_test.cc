@@ -17,7 +17,9 @@
 
 #include "common/atomic_file.h"
 #include "common/policy/policy_checkpoint.h"
+#include "common/wire/tensor_codec.h"
 #include "learner/critic.h"
+#include "learner/episode_ends.h"
 #include "learner/model_config.h"
 #include "learner/modskill_policy.h"
 #include "learner/policy_export.h"
@@ -518,6 +520,37 @@ TEST(SkillReuseTest, NormalizedReturnSumsTheGoalTermsOverTheEpisodeLimit) {
   EXPECT_EQ(TaskReturn({"reach", "energy"}, 100).episode_steps(), 100);
   EXPECT_TRUE(std::isnan(MeanOrNan({})));
   EXPECT_DOUBLE_EQ(MeanOrNan({0.25, 0.75}), 0.5);
+}
+
+TEST(SkillReuseTest, EpisodeEndsCountWhyEpisodesEnded) {
+  EpisodeEnds ends;
+  EXPECT_EQ(ends.Summary(), "-");
+  for (int cause : {int{v1::END_CAUSE_FALL}, int{v1::END_CAUSE_TASK}, int{v1::END_CAUSE_FALL}, int{v1::END_CAUSE_TIME}, 250}) {
+    ends.Add(cause);
+  }
+  EXPECT_EQ(ends.total(), 5);
+  EXPECT_EQ(ends.count(v1::END_CAUSE_FALL), 2);
+  EXPECT_EQ(ends.Summary(), "time 1, fall 2, task 1, unreported 1") << "an unknown cause is unreported";
+  EXPECT_EQ(EpisodeEnds::Names(), (std::vector<std::string>{"time", "tracking", "fall", "task", "blow_up"}));
+  EXPECT_EQ(ends.Counts(), (std::vector<double>{1, 0, 2, 1, 0}));
+  EpisodeEnds more;
+  more.Add(v1::END_CAUSE_BLOW_UP);
+  ends.Merge(more);
+  EXPECT_EQ(ends.count(v1::END_CAUSE_BLOW_UP), 1);
+
+  // On the wire: absent is "not said", a malformed field is the server's fault (DATA_LOSS).
+  v1::StepResult result;
+  auto absent = ReadEndCauses(result, 3);
+  ASSERT_TRUE(absent.ok());
+  EXPECT_TRUE(absent->empty());
+  const uint8_t causes[3] = {0, 3, 4};
+  SetUint8Tensor({3}, causes, result.mutable_end_cause());
+  auto read = ReadEndCauses(result, 3);
+  ASSERT_TRUE(read.ok()) << read.status();
+  EXPECT_EQ(*read, (std::vector<int>{0, 3, 4}));
+  auto short_field = ReadEndCauses(result, 4);
+  EXPECT_EQ(short_field.status().code(), absl::StatusCode::kDataLoss);
+  EXPECT_THAT(std::string(short_field.status().message()), HasSubstr("StepResult.end_cause"));
 }
 
 }  // namespace

@@ -689,7 +689,12 @@ TEST(LearnerTrainingTest, SteerPolicyTrainsOverATrackersFrozenSkills) {
     EXPECT_GE(row.mean_normalized_return, 0.0) << row.z_source;
     EXPECT_LE(row.mean_normalized_return, 1.0) << row.z_source;
     EXPECT_LE(row.mean_episode_length, 30.0) << row.z_source;
+    // Every episode says why it ended: the 30-step limit or a fall, nothing unreported.
+    EXPECT_EQ(row.ends.total(), 4) << row.z_source;
+    EXPECT_EQ(row.ends.count(v1::END_CAUSE_TIME) + row.ends.count(v1::END_CAUSE_FALL), 4) << row.z_source;
   }
+  EXPECT_THAT(report->ToMarkdown(), HasSubstr("| ended by |"));
+  EXPECT_THAT(report->ToJson(), HasSubstr("\"ended_by\""));
   EXPECT_THAT(report->ToMarkdown(), HasSubstr("random unit z"));
   EXPECT_THAT(report->ToMarkdown(), HasSubstr("skill prior alone"));
 

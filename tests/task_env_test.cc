@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "server/core/env/base_motion_anchor.h"
+#include "server/core/env/episode_end.h"
 #include "server/core/env/fall_detection.h"
 #include "server/core/env/observation.h"
 #include "server/core/env/reach_task.h"
@@ -420,6 +421,9 @@ TEST(TaskEnvTest, StepsFallAndTruncate) {
     for (int i = 0; i < 4; ++i) {
       falls += limp->buffers().done[i] && !limp->buffers().truncated[i];
       truncations += limp->buffers().truncated[i];
+      // Why it ended rides along: a fall here; nothing while the episode goes on.
+      EXPECT_EQ(limp->buffers().end_cause[i],
+                static_cast<uint8_t>(limp->buffers().done[i] ? EpisodeEnd::kFall : EpisodeEnd::kNone));
       const float* terms = &limp->buffers().reward_terms[i * 3];
       EXPECT_GE(terms[0], 0.f);
       EXPECT_LE(terms[0] + terms[1], 1.f + 1e-6f);
@@ -439,7 +443,10 @@ TEST(TaskEnvTest, StepsFallAndTruncate) {
   ASSERT_TRUE(short_episodes->Step(zeros).ok());
   for (int i = 0; i < 4; ++i) EXPECT_FALSE(short_episodes->buffers().done[i]);
   ASSERT_TRUE(short_episodes->Step(zeros).ok());
-  for (int i = 0; i < 4; ++i) EXPECT_TRUE(short_episodes->buffers().done[i] && short_episodes->buffers().truncated[i]);
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_TRUE(short_episodes->buffers().done[i] && short_episodes->buffers().truncated[i]);
+    EXPECT_EQ(short_episodes->buffers().end_cause[i], static_cast<uint8_t>(EpisodeEnd::kTime));
+  }
 }
 
 // A strike batch builds its own model with the target; its envs step, reset the target with
@@ -467,6 +474,23 @@ TEST(TaskEnvTest, StrikeEpisodesStepAndRestartTheTarget) {
   }
   EXPECT_EQ(batch->physics_resets(), 0);
   EXPECT_GT(episodes, 0) << "open-loop walking falls or bumps into the target within 3 s";
+}
+
+// A strike episode whose torso walks into the target ends as the task's own failure, not a fall.
+TEST(TaskEnvTest, StrikeContactEndsAsTheTasksFailure) {
+  auto batch = MakeBatch(TaskConfig(TaskKind::kStrike, 1));
+  ASSERT_NE(batch, nullptr);
+  batch->Reset();
+  const mjModel* model = batch->humanoid().model();
+  const int qpos = model->jnt_qposadr[mj_name2id(model, mjOBJ_JOINT, kStrikeTargetName)];
+  mjData* data = batch->env(0).mutable_data();
+  // The target where the pelvis is, upright: the torso touches it in the first step.
+  data->qpos[qpos] = data->qpos[0];
+  data->qpos[qpos + 1] = data->qpos[1];
+  ASSERT_TRUE(batch->Step(std::vector<float>(69, 0.f)).ok());
+  EXPECT_TRUE(batch->buffers().done[0]);
+  EXPECT_FALSE(batch->buffers().truncated[0]);
+  EXPECT_EQ(batch->buffers().end_cause[0], static_cast<uint8_t>(EpisodeEnd::kTask));
 }
 
 TEST(TaskSettingsTest, OutOfRangeSettingsNameTheField) {

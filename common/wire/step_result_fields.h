@@ -32,7 +32,8 @@
   X(ended_family_params, float, FLOAT32, family_params, 0, kFamily) /* valid where done */                  \
   X(phase_step, float, FLOAT32, vector, 0, kFamily)              /* frames the phase advanced */            \
   X(spike_reward, float, FLOAT32, vector, 0, kFamily)            /* one-off part of reward */               \
-  X(fitness, float, FLOAT32, vector, 0, kFamily)                 /* F of the ended episode */
+  X(fitness, float, FLOAT32, vector, 0, kFamily)                 /* F of the ended episode */                \
+  X(end_cause, uint8_t, UINT8, vector, 0, kOptional)             /* v1::EndCause, valid where done */
 
 namespace modskill {
 

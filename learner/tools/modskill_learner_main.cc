@@ -563,8 +563,8 @@ void PrintIteration(const IterationStats& s, const Trainer& trainer, int last, d
   }
   const std::string task = IsTrackingTask(trainer.config().task)
                                ? ""
-                               : absl::StrFormat("%s %.3f (%d ended) | ", trainer.config().task, s.normalized_return,
-                                                 s.task_episodes);
+                               : absl::StrFormat("%s %.3f (%d ended: %s) | ", trainer.config().task,
+                                                 s.normalized_return, s.task_episodes, s.task_ends.Summary());
   std::printf(
       "it %4d/%d | %9lld steps %5.0f/s | reward %.3f amp %.3f | return %6.2f len %5.1f | %s%s | "
       "pi %+.4f v %.4f kl %.4f clip %.3f lr %.1e | "

@@ -6,6 +6,7 @@
 
 #include "common/viewer/viewer_wire.h"
 #include "common/wire/tensor_codec.h"
+#include "server/core/env/episode_end.h"
 #include "server/core/env/family_episode.h"
 #include "server/core/motion/clip_view.h"
 
@@ -165,6 +166,13 @@ void EncodeAmpObs(const BatchBuffers& b, const EnvSpec& spec, int amp_frames, v1
     out->clear_amp_obs();
   }
 }
+
+// StepResult.end_cause ships EpisodeEnd's values as they are.
+static_assert(static_cast<int>(EpisodeEnd::kTime) == v1::END_CAUSE_TIME &&
+              static_cast<int>(EpisodeEnd::kTracking) == v1::END_CAUSE_TRACKING &&
+              static_cast<int>(EpisodeEnd::kFall) == v1::END_CAUSE_FALL &&
+              static_cast<int>(EpisodeEnd::kTask) == v1::END_CAUSE_TASK &&
+              static_cast<int>(EpisodeEnd::kBlowUp) == v1::END_CAUSE_BLOW_UP);
 
 }  // namespace
 

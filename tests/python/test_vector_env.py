@@ -9,6 +9,7 @@ import unittest
 import numpy as np
 
 import modskill
+from modskill.v1 import modskill_pb2
 
 SERVER = os.environ.get("MODSKILL_SERVER", "")
 
@@ -116,7 +117,9 @@ class VectorEnvTest(unittest.TestCase):
             self.assertTrue(truncated.all(), f"step {step}")
             np.testing.assert_array_equal(info["_final_info"], truncated)
             final = info["final_info"]
-            self.assertEqual(set(final), {"clip_id", "frame", "max_body_error", "mean_body_error", "part_error"})
+            self.assertEqual(set(final), {"clip_id", "frame", "max_body_error", "mean_body_error", "part_error",
+                                          "end_cause"})
+            np.testing.assert_array_equal(final["end_cause"], np.full(env.num_envs, modskill_pb2.END_CAUSE_TIME))
             self.assertNotIn("final_obs", info)  # the server does not send the ended episode's last obs
             if step == 3:
                 np.testing.assert_array_equal(final["frame"], start_frames + 3)

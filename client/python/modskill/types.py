@@ -210,6 +210,9 @@ class StepResult:
     phase_step: Optional[np.ndarray] = None  # float32 [N]: frames the phase advanced (1: the clip's pace)
     spike_reward: Optional[np.ndarray] = None  # float32 [N]: the one-off part of reward (a peak's)
     fitness: Optional[np.ndarray] = None  # float32 [N]: the ended episode's fitness F (where done)
+    # uint8 [N]: why each ended episode ended (where done), a modskill_pb2.EndCause value (TIME,
+    # TRACKING, FALL, TASK, BLOW_UP); None where the server sent none
+    end_cause: Optional[np.ndarray] = None
 
     # Proto fields the session consumes itself rather than handing to the caller.
     SESSION_FIELDS = ("motion_set_update",)
@@ -242,6 +245,7 @@ class StepResult:
             phase_step=tensors.decode_field(result, "phase_step"),
             spike_reward=tensors.decode_field(result, "spike_reward"),
             fitness=tensors.decode_field(result, "fitness"),
+            end_cause=tensors.decode_field(result, "end_cause"),
         )
 
     @property

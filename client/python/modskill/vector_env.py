@@ -26,7 +26,7 @@ Conventions (Gymnasium 1.x ``gymnasium.vector.VectorEnv``):
   available (the server does not send it), so ``info`` has no ``"final_obs"``. What the server
   does report about the ended episode is in ``info["final_info"]`` (a dict of arrays, valid
   where ``info["_final_info"]`` is True): clip_id, frame, max_body_error, mean_body_error,
-  part_error.
+  part_error and end_cause (why it ended: a ``modskill_pb2.EndCause`` value).
 - ``info`` also holds, every step: ``parts`` ({part name: slice of the obs columns}),
   ``clip_id`` and ``frame`` (the reference clip and frame of each row's state), ``part_error``,
   ``max_body_error``, ``mean_body_error`` (m, before any reset), ``reward_terms``
@@ -179,6 +179,9 @@ class VectorEnv:
                 "mean_body_error": result.mean_body_error,
                 "part_error": result.part_error,
             }
+            if result.end_cause is not None:
+                # Why each episode ended: a modskill_pb2.EndCause value (TIME, TRACKING, FALL, TASK, BLOW_UP).
+                info["final_info"]["end_cause"] = result.end_cause
             info["_final_info"] = result.done.copy()
         return info
 

@@ -6,8 +6,10 @@
 namespace modskill {
 
 void MapActionToPdTargets(const ActionMapping& mapping, const HumanoidModel& humanoid, const EnvSpec& spec,
-                          const float* action, const double* reference_dof, double* pd_targets) {
+                          const float* action, const double* reference_dof, const double* reference_rate,
+                          double* pd_targets) {
   const std::vector<double>& offset = humanoid.action_offset();
+  const bool lead = humanoid.options().damp_to_reference_rate && reference_rate != nullptr;
   const std::vector<double>& scale = humanoid.action_scale();
   // The hinges' actions; a family session's time warp comes after them (spec.time_warp_action).
   const int hinge_actions = static_cast<int>(spec.action_hinge.size());
@@ -19,7 +21,8 @@ void MapActionToPdTargets(const ActionMapping& mapping, const HumanoidModel& hum
     } else {
       // The range is offset +- half of it; scale = min(1.2 * half range, pi).
       const BodySpec& body = humanoid.spec().body(1 + h / 3);
-      const double target = reference_dof[h] + mapping.residual_scale * scale[h] * clamped;
+      double target = reference_dof[h] + mapping.residual_scale * scale[h] * clamped;
+      if (lead) target += humanoid.kd()[h] / humanoid.kp()[h] * reference_rate[h];
       pd_targets[h] = mapping.clamp_to_joint_range ? std::clamp(target, body.range_low[h % 3], body.range_high[h % 3])
                                                    : target;
     }

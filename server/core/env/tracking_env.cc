@@ -124,7 +124,8 @@ void TrackingEnv::Step(const float* action, EnvRow row) {
   const MotionClip& motion = *motion_;
   const int next_frame = NextFrame();
   MapActionToPdTargets(config.action, *context_->humanoid, *context_->spec, action,
-                       &motion.dof_pos[static_cast<size_t>(next_frame) * motion.num_hinges()], pd_targets_.data());
+                       &motion.dof_pos[static_cast<size_t>(next_frame) * motion.num_hinges()],
+                       &motion.dof_vel[static_cast<size_t>(next_frame) * motion.num_hinges()], pd_targets_.data());
   const double power = pd_.Step(pd_targets_.data(), data_);
   ++episode_steps_;
   // An anchored reference keeps the motion WriteObservation found: it carried next_frame.
@@ -140,8 +141,10 @@ void TrackingEnv::Step(const float* action, EnvRow row) {
   if (goal_task_ != nullptr) {
     ScoreGoalTask(terms, row);
     AddEnergyAndSum(power, terms, row);
-    const bool failed = goal_task_->Failed(data_) || (episode_steps_ > 1 && context_->fall_detector->Fallen(data_, sim_));
-    FinishStep(failed, episode_steps_ >= TaskEpisodeSteps(config.max_episode_steps), row);
+    const EpisodeEnd failure = goal_task_->Failed(data_) ? EpisodeEnd::kTask
+                               : episode_steps_ > 1 && context_->fall_detector->Fallen(data_, sim_) ? EpisodeEnd::kFall
+                                                                                                    : EpisodeEnd::kNone;
+    FinishStep(failure, episode_steps_ >= TaskEpisodeSteps(config.max_episode_steps), row);
     return;
   }
   const TrackingErrors errors = ScoreTracking(terms, row);
@@ -149,7 +152,7 @@ void TrackingEnv::Step(const float* action, EnvRow row) {
   const bool at_end = LoopsClip() ? episode_steps_ >= TaskEpisodeSteps(config.max_episode_steps)
                                   : frame_ >= motion.num_frames - 1 ||
                                         (config.max_episode_steps > 0 && episode_steps_ >= config.max_episode_steps);
-  FinishStep(Terminated(errors), at_end, row);
+  FinishStep(Terminated(errors) ? EpisodeEnd::kTracking : EpisodeEnd::kNone, at_end, row);
 }
 
 void TrackingEnv::EndOnBlowUp(EnvRow row) {
@@ -162,6 +165,7 @@ void TrackingEnv::EndOnBlowUp(EnvRow row) {
   out.reward[i] = 0.f;
   out.done[i] = 1;
   out.truncated[i] = 0;
+  out.end_cause[i] = static_cast<uint8_t>(EpisodeEnd::kBlowUp);
   out.ended_clip_id[i] = clip_;
   out.ended_frame[i] = frame_;
   out.max_body_error[i] = std::numeric_limits<float>::infinity();
@@ -216,12 +220,14 @@ void TrackingEnv::AddEnergyAndSum(double power, float* terms, EnvRow row) const 
   row.buffers->reward[row.index] = reward;
 }
 
-void TrackingEnv::FinishStep(bool terminated, bool at_end, EnvRow row) {
+void TrackingEnv::FinishStep(EpisodeEnd failure, bool at_end, EnvRow row) {
   BatchBuffers& out = *row.buffers;
   const int i = row.index;
+  const bool terminated = failure != EpisodeEnd::kNone;
   const bool truncated = !terminated && at_end;
   out.done[i] = terminated || truncated;
   out.truncated[i] = truncated;
+  out.end_cause[i] = static_cast<uint8_t>(terminated ? failure : truncated ? EpisodeEnd::kTime : EpisodeEnd::kNone);
   if (terminated || truncated) {
     out.ended_clip_id[i] = clip_;
     out.ended_frame[i] = frame_;

@@ -23,6 +23,7 @@
 #include "server/core/env/base_motion_anchor.h"
 #include "server/core/env/batch_buffers.h"
 #include "server/core/env/env_spec.h"
+#include "server/core/env/episode_end.h"
 #include "server/core/env/family_episode.h"
 #include "server/core/env/fall_detection.h"
 #include "server/core/env/goal_task.h"
@@ -138,9 +139,9 @@ class TrackingEnv {
   void ScoreGoalTask(float* terms, EnvRow row);
   // The energy term (last column) and the reward, their sum.
   void AddEnergyAndSum(double power, float* terms, EnvRow row) const;
-  // Books the episode's end if `terminated` or the step limit (or the clip's end) is reached;
-  // otherwise pushes the AMP frame and writes the next observation.
-  void FinishStep(bool terminated, bool at_end, EnvRow row);
+  // Books the episode's end if `failure` names one (kNone: none) or the step limit (or the clip's
+  // end) is reached; otherwise pushes the AMP frame and writes the next observation.
+  void FinishStep(EpisodeEnd failure, bool at_end, EnvRow row);
   // The reference frame the next step reaches: tracking stops at the clip's end, goal tasks and
   // looping clips go on at frame 1.
   int NextFrame() const;

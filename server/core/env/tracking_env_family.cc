@@ -25,7 +25,8 @@ void TrackingEnv::StepFamily(const float* action, EnvRow row) {
   // The time warp picks the phase this step reaches; the displacement moves its reference pose.
   const double phase_step = family_->Advance(action[spec.time_warp_action], last);
   ReadReferenceStateAt(motion, family_->phase(), &reference_);
-  MapActionToPdTargets(config.action, *context_->humanoid, spec, action, reference_.dof_pos.data(), pd_targets_.data());
+  MapActionToPdTargets(config.action, *context_->humanoid, spec, action, reference_.dof_pos.data(), nullptr,
+                       pd_targets_.data());
   const double power = pd_.Step(pd_targets_.data(), data_);
   ++episode_steps_;
   frame_ = static_cast<int>(std::floor(family_->phase()));
@@ -49,11 +50,14 @@ void TrackingEnv::StepFamily(const float* action, EnvRow row) {
   AddEnergyAndSum(power, terms, row);
   out.spike_reward[i] = score.spike;
   // A family leaves its clip by design: it fails by falling or drifting past the (loose) distance.
-  const bool failed =
-      episode_steps_ > 1 && (Terminated(errors) || context_->fall_detector->Fallen(data_, sim_));
+  const EpisodeEnd failure = episode_steps_ <= 1                                ? EpisodeEnd::kNone
+                             : Terminated(errors)                                 ? EpisodeEnd::kTracking
+                             : context_->fall_detector->Fallen(data_, sim_) ? EpisodeEnd::kFall
+                                                                                  : EpisodeEnd::kNone;
+  const bool failed = failure != EpisodeEnd::kNone;
   const bool at_end = family_->phase() >= last || episode_steps_ >= TaskEpisodeSteps(config.max_episode_steps);
   out.fitness[i] = failed || at_end ? static_cast<float>(family_->EpisodeFitness()) : 0.f;
-  FinishStep(failed, at_end, row);
+  FinishStep(failure, at_end, row);
 }
 
 void TrackingEnv::WriteFamilyObservation(float* obs, EnvRow row) {

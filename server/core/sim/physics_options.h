@@ -30,6 +30,10 @@ struct PhysicsOptions {
   // Multiplies every hinge's kp and kd (the spec's, PHC's). Measured on the walk: 2 x tracks far
   // worse, and the open-loop reference falls as early at 1-3 x (README, "Learning").
   double pd_gain_scale = 1.0;
+  // Residual PD targets lead the reference by kd / kp times its hinge rate: the servo then damps
+  // the error to the reference's velocity, kp (q* - q) + kd (qdot_ref - qdot), instead of braking
+  // every motion toward rest (a PD tracking a moving target lags it by kd / kp x its rate).
+  bool damp_to_reference_rate = false;
   bool self_collision = true;  // PHC collides every pair of bodies except parent and child
   bool fixed_root = false;     // weld the pelvis in the air (PD tests, visualization)
   double friction = 1.0;
