@@ -176,13 +176,7 @@ TEST(ReachTeacherTest, AReachRunTrainsWithTheTeacherAndEvaluatesIt) {
   auto client = ConnectTo(*server);
   auto imported = ImportTaskPolicy(dir + "/policy.pt", (*trainer)->spec());
   ASSERT_TRUE(imported.ok()) << imported.status();
-  TaskEvaluationOptions options;
-  options.session.set_task("reach");
-  options.session.add_motions("deepmimic_walk");
-  options.session.set_action_mode(v1::RESIDUAL);
-  options.session.set_residual_scale(static_cast<float>(config.residual_scale));
-  options.session.set_max_episode_steps(20);
-  options.episodes = 4;
+  TaskEvaluationOptions options = SmallTaskEvaluation("reach", config, 20);
   auto teacher = ReachTeacher::Load(config.task_teacher);
   ASSERT_TRUE(teacher.ok());
   options.teacher = &*teacher;

@@ -674,13 +674,7 @@ TEST(LearnerTrainingTest, SteerPolicyTrainsOverATrackersFrozenSkills) {
   auto imported = ImportTaskPolicy(dir + "/policy.pt", (*trainer)->spec());
   ASSERT_TRUE(imported.ok()) << imported.status();
 
-  TaskEvaluationOptions options;
-  options.session.set_task("steer");
-  options.session.add_motions("deepmimic_walk");
-  options.session.set_action_mode(v1::RESIDUAL);
-  options.session.set_residual_scale(static_cast<float>(config.residual_scale));
-  options.session.set_max_episode_steps(30);
-  options.episodes = 4;
+  TaskEvaluationOptions options = SmallTaskEvaluation("steer", config, 30);
   auto report = EvaluateTaskPolicy(*client, *imported, "steer policy", options);
   ASSERT_TRUE(report.ok()) << report.status();
   ASSERT_EQ(report->rows.size(), 4u) << "the policy, random z, constant z and the skill prior alone";

@@ -1,11 +1,12 @@
 // The small trainer configuration the learner tests train with: two sessions of 16 envs per
-// server, a few iterations, one update thread.
+// server, a few iterations, one update thread; and the small task evaluation they run after.
 #ifndef MODSKILL_TESTS_TRAINER_TEST_CONFIG_H_
 #define MODSKILL_TESTS_TRAINER_TEST_CONFIG_H_
 
 #include <string>
 #include <vector>
 
+#include "learner/task_evaluation.h"
 #include "learner/trainer_config.h"
 
 namespace modskill::learner {
@@ -27,6 +28,20 @@ inline TrainerConfig SmallTestTrainerConfig(const std::vector<std::string>& serv
   // ctest runs other tests beside these: two OpenMP threads each would spin against them.
   config.update_threads = 1;
   return config;
+}
+
+// Four episodes of `task` on the walk, of at most `max_episode_steps`, in the residual mode of
+// `config` (the run that trained the policy).
+inline TaskEvaluationOptions SmallTaskEvaluation(const std::string& task, const TrainerConfig& config,
+                                                 int max_episode_steps) {
+  TaskEvaluationOptions options;
+  options.session.set_task(task);
+  options.session.add_motions("deepmimic_walk");
+  options.session.set_action_mode(v1::RESIDUAL);
+  options.session.set_residual_scale(static_cast<float>(config.residual_scale));
+  options.session.set_max_episode_steps(max_episode_steps);
+  options.episodes = 4;
+  return options;
 }
 
 }  // namespace modskill::learner
