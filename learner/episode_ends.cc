@@ -1,7 +1,5 @@
 #include "learner/episode_ends.h"
 
-#include <algorithm>
-
 #include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
@@ -47,8 +45,8 @@ std::vector<std::string> EpisodeEnds::Names() {
   return names;
 }
 
-std::vector<double> EpisodeEnds::Counts() const {
-  return std::vector<double>(count_.begin() + v1::END_CAUSE_TIME, count_.end());
+std::vector<int> EpisodeEnds::Counts() const {
+  return std::vector<int>(count_.begin() + v1::END_CAUSE_TIME, count_.end());
 }
 
 absl::StatusOr<std::vector<int>> ReadEndCauses(const v1::StepResult& result, int n) {

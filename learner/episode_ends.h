@@ -28,7 +28,7 @@ class EpisodeEnds {
   // The causes' short names (time, tracking, fall, task, blow_up), EndCause order from TIME on.
   static std::vector<std::string> Names();
   // Counts in Names() order.
-  std::vector<double> Counts() const;
+  std::vector<int> Counts() const;
 
  private:
   std::array<int, kCauses> count_{};

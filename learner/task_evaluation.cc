@@ -228,8 +228,8 @@ std::string TaskEvaluationReport::ToJson() const {
   for (const TaskEvaluationRow& row : rows) {
     nlohmann::json ended_by = nlohmann::json::object();
     const std::vector<std::string> names = EpisodeEnds::Names();
-    const std::vector<double> counts = row.ends.Counts();
-    for (size_t c = 0; c < names.size(); ++c) ended_by[names[c]] = static_cast<int>(counts[c]);
+    const std::vector<int> counts = row.ends.Counts();
+    for (size_t c = 0; c < names.size(); ++c) ended_by[names[c]] = counts[c];
     json["runs"].push_back({{"z_source", row.z_source},
                             {"mean_normalized_return", row.mean_normalized_return},
                             {"mean_episode_length", row.mean_episode_length},

@@ -127,7 +127,8 @@ absl::Status Trainer::RecordStep(SlotRollout& r, int t) {
   for (const auto* tensor : {&reward, &done, &truncated, &amp, &terms}) {
     if (!tensor->ok()) return tensor->status();
   }
-  auto causes = ReadEndCauses(result, r.n);
+  // Only task runs count why their episodes end.
+  absl::StatusOr<std::vector<int>> causes = task_return_ ? ReadEndCauses(result, r.n) : std::vector<int>{};
   if (!causes.ok()) return causes.status();
   r.task_reward[t].copy_(*reward);
   r.dones[t].copy_(*done);

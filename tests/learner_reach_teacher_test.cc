@@ -143,19 +143,14 @@ std::string WriteTeacher(const std::string& path, const std::vector<std::string>
 TEST(ReachTeacherTest, AReachRunTrainsWithTheTeacherAndEvaluatesIt) {
   auto server = StartTestServer();
   const std::string server_address = absl::StrCat("127.0.0.1:", server->port());
-  TrainerConfig tracker_config = SmallTestTrainerConfig({server_address}, RunDir("tracker"));
-  tracker_config.motions = {"deepmimic_walk"};
-  tracker_config.iterations = 1;
-  tracker_config.model.controller_input = ModelConfig::ControllerInput::kProprioception;
-  auto tracker = Trainer::Create(tracker_config);
-  ASSERT_TRUE(tracker.ok()) << tracker.status();
-  ASSERT_TRUE((*tracker)->Run().ok());
+  auto skills = TrainWalkSkills({server_address}, RunDir("tracker"));
+  ASSERT_TRUE(skills.ok()) << skills.status();
 
   const std::string dir = RunDir("reach");
   TrainerConfig config = SmallTestTrainerConfig({server_address}, dir);
   config.motions = {"deepmimic_walk"};
   config.task = "reach";
-  config.skills = tracker_config.run_dir + "/policy.pt";
+  config.skills = *skills;
   config.task_parts = {"R_Arm"};
   config.iterations = 3;
   config.report_every = 1;

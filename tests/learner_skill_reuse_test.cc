@@ -532,7 +532,7 @@ TEST(SkillReuseTest, EpisodeEndsCountWhyEpisodesEnded) {
   EXPECT_EQ(ends.count(v1::END_CAUSE_FALL), 2);
   EXPECT_EQ(ends.Summary(), "time 1, fall 2, task 1, unreported 1") << "an unknown cause is unreported";
   EXPECT_EQ(EpisodeEnds::Names(), (std::vector<std::string>{"time", "tracking", "fall", "task", "blow_up"}));
-  EXPECT_EQ(ends.Counts(), (std::vector<double>{1, 0, 2, 1, 0}));
+  EXPECT_EQ(ends.Counts(), (std::vector<int>{1, 0, 2, 1, 0}));
   EpisodeEnds more;
   more.Add(v1::END_CAUSE_BLOW_UP);
   ends.Merge(more);

@@ -627,14 +627,9 @@ void ExpectSkillsIntact(const std::string& skills_path, const std::string& polic
 // random-z and constant-z baselines; an unknown task is refused before any session opens.
 TEST(LearnerTrainingTest, SteerPolicyTrainsOverATrackersFrozenSkills) {
   auto server = StartTestServer();
-  TrainerConfig tracker_config = SmallConfig({server->port()}, RunDir("skills_tracker"));
-  tracker_config.motions = {"deepmimic_walk"};
-  tracker_config.iterations = 1;
-  tracker_config.model.controller_input = ModelConfig::ControllerInput::kProprioception;
-  auto tracker = Trainer::Create(tracker_config);
-  ASSERT_TRUE(tracker.ok()) << tracker.status();
-  ASSERT_TRUE((*tracker)->Run().ok());
-  const std::string skills = tracker_config.run_dir + "/policy.pt";
+  auto trained_skills = TrainWalkSkills({absl::StrCat("127.0.0.1:", server->port())}, RunDir("skills_tracker"));
+  ASSERT_TRUE(trained_skills.ok()) << trained_skills.status();
+  const std::string skills = *trained_skills;
 
   const std::string dir = RunDir("steer");
   TrainerConfig config = SmallConfig({server->port()}, dir);

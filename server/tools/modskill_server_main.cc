@@ -42,7 +42,7 @@ ABSL_FLAG(double, pd_gain_scale, 1.0,
           "was trained with");
 ABSL_FLAG(bool, damp_to_reference_rate, false,
           "residual PD targets lead the reference by kd/kp x its hinge rate, so the servos damp toward the "
-          "reference's velocity instead of toward rest");
+          "reference's velocity instead of toward rest (not in motor-skill family sessions)");
 ABSL_FLAG(std::string, sampling, "failure_count",
           "how sessions pick clips from ReportFailures: failure_count (PHC: probability ~ recent failures), "
           "decay_on_success (ProtoMotions: weight x0.999 per success, 1 per failure), failure_rate "

@@ -33,6 +33,8 @@ struct PhysicsOptions {
   // Residual PD targets lead the reference by kd / kp times its hinge rate: the servo then damps
   // the error to the reference's velocity, kp (q* - q) + kd (qdot_ref - qdot), instead of braking
   // every motion toward rest (a PD tracking a moving target lags it by kd / kp x its rate).
+  // Tracking and goal-task sessions; a motor-skill family's displaced, time-warped reference has
+  // no rate to lead by, so its sessions ignore it.
   bool damp_to_reference_rate = false;
   bool self_collision = true;  // PHC collides every pair of bodies except parent and child
   bool fixed_root = false;     // weld the pelvis in the air (PD tests, visualization)
