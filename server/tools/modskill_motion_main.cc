@@ -1,12 +1,13 @@
 // modskill-motion: imports motion files into the native clip format, inspects clips, writes
 // them as one self-contained HTML page, splices one clip's parts onto another, and makes held
-// reach poses.
+// reach poses, and bends a clip's path into a turn.
 //
 //   modskill-motion import IN... --out DIR [--labels CSV] [--fps 30]
 //   modskill-motion inspect FILE...
 //   modskill-motion view CLIP... --html OUT.html   (CLIP: a motion file or a library clip name)
 //   modskill-motion splice BASE SOURCE --parts R_Arm,L_Arm --name NAME --out DIR
 //   modskill-motion reach BASE --count 32 --name NAME --out DIR   (held reach poses by IK)
+//   modskill-motion turn BASE --yaw_rate 45 --name NAME --out DIR   (the path bent at 45 deg/s)
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -35,12 +36,13 @@
 #include "server/core/motion/stance_feet.h"
 #include "server/core/motion/motion_library.h"
 #include "server/core/motion/motion_splice.h"
+#include "server/core/motion/motion_turn.h"
 #include "server/core/motion/reach_pose.h"
 #include "server/core/sim/humanoid_spec.h"
 #include "server/core/sim/part_layout.h"
 #include "server/core/util/confined_path.h"
 
-ABSL_FLAG(std::string, out, "", "import, splice: directory the .msclip files are written to");
+ABSL_FLAG(std::string, out, "", "import, splice, reach, turn: directory the .msclip files are written to");
 ABSL_FLAG(std::string, labels, "", "import: CSV 'name,humanml3d_id,label' giving clips their captions");
 ABSL_FLAG(double, fps, 30.0, "import, inspect, view: rate the clips are resampled to (the control rate)");
 ABSL_FLAG(bool, ground, true, "import, inspect, view: shift each clip so that its lowest point touches the floor");
@@ -54,7 +56,8 @@ ABSL_FLAG(std::string, timing, "stretch",
           "splice: stretch (SOURCE's whole duration over BASE's), clip (SOURCE at its own speed, held at its end) or "
           "hold (SOURCE's pose at --hold_at held throughout, reached from BASE's pose over the first second)");
 ABSL_FLAG(double, hold_at, 0.5, "splice --timing hold: the held pose's time, a share of SOURCE's duration in [0, 1]");
-ABSL_FLAG(std::string, name, "", "splice: the new clip's name (its file is DIR/NAME.msclip); reach: the prefix of NAME_000...");
+ABSL_FLAG(std::string, name, "", "splice, turn: the new clip's name (its file is DIR/NAME.msclip); reach: the prefix of NAME_000...");
+ABSL_FLAG(double, yaw_rate, 0.0, "turn: the path's yaw rate in deg/s, positive to the left (|rate| <= 180)");
 ABSL_FLAG(std::string, hand, "R_Hand", "reach: the body brought to each target; its part's chain up to it moves");
 ABSL_FLAG(int, count, 32, "reach: how many clips, one per target drawn uniformly in the box");
 ABSL_FLAG(int, seed, 1, "reach: the seed of the targets");
@@ -370,6 +373,21 @@ int Reach(const std::vector<std::string>& inputs, const HumanoidSpec& spec, cons
   return 0;
 }
 
+// Writes a clip a tool made to DIR/NAME.msclip and prints one line about it.
+int WriteMadeClip(const HumanoidSpec& spec, const std::string& out_dir, const MotionClip& clip) {
+  std::error_code error;
+  std::filesystem::create_directories(out_dir, error);
+  absl::StatusOr<std::string> path = ConfinedPath(out_dir, clip.name + std::string(kClipFileExtension));
+  absl::Status written = path.ok() ? WriteClipFile(*path, clip) : path.status();
+  if (!written.ok()) {
+    std::fprintf(stderr, "error: --out %s: %s\n", out_dir.c_str(), std::string(written.message()).c_str());
+    return 1;
+  }
+  std::printf("%-28s %5d frames  %6.2f s  contact %5.1f%%  -> %s\n", clip.name.c_str(), clip.num_frames,
+              clip.duration(), 100.0 * FootContactRatio(spec, clip), path->c_str());
+  return 0;
+}
+
 int Splice(const std::vector<std::string>& inputs, const HumanoidSpec& spec, const ImportOptions& options) {
   const std::string out_dir = absl::GetFlag(FLAGS_out);
   if (inputs.size() != 2 || out_dir.empty() || absl::GetFlag(FLAGS_name).empty()) {
@@ -399,17 +417,34 @@ int Splice(const std::vector<std::string>& inputs, const HumanoidSpec& spec, con
     std::fprintf(stderr, "error: %s\n", std::string(spliced.status().message()).c_str());
     return 1;
   }
-  std::error_code error;
-  std::filesystem::create_directories(out_dir, error);
-  absl::StatusOr<std::string> path = ConfinedPath(out_dir, spliced->name + std::string(kClipFileExtension));
-  absl::Status written = path.ok() ? WriteClipFile(*path, *spliced) : path.status();
-  if (!written.ok()) {
-    std::fprintf(stderr, "error: --out %s: %s\n", out_dir.c_str(), std::string(written.message()).c_str());
+  return WriteMadeClip(spec, out_dir, *spliced);
+}
+
+// Writes BASE with its path bent at --yaw_rate.
+int Turn(const std::vector<std::string>& inputs, const HumanoidSpec& spec, const ImportOptions& options) {
+  const std::string out_dir = absl::GetFlag(FLAGS_out);
+  if (inputs.size() != 1 || out_dir.empty() || absl::GetFlag(FLAGS_name).empty()) {
+    std::fprintf(stderr, "error: turn needs BASE --yaw_rate DEG_PER_S --name NAME --out DIR\n");
+    return 2;
+  }
+  const double degrees = absl::GetFlag(FLAGS_yaw_rate);
+  if (!(std::abs(degrees) <= 180.0)) {
+    std::fprintf(stderr, "error: --yaw_rate %g is not a finite rate within +-180 deg/s\n", degrees);
+    return 2;
+  }
+  std::optional<MotionLibrary> library;
+  absl::StatusOr<MotionClip> base = ResolveClip(inputs[0], spec, options, &library);
+  if (!base.ok()) {
+    std::fprintf(stderr, "error: %s\n", std::string(base.status().message()).c_str());
+    return 2;
+  }
+  const TurnRequest request{absl::GetFlag(FLAGS_name), degrees * M_PI / 180.0, ""};
+  absl::StatusOr<MotionClip> turned = TurnClip(spec, *base, request);
+  if (!turned.ok()) {
+    std::fprintf(stderr, "error: %s\n", std::string(turned.status().message()).c_str());
     return 1;
   }
-  std::printf("%-28s %5d frames  %6.2f s  contact %5.1f%%  -> %s\n", spliced->name.c_str(), spliced->num_frames,
-              spliced->duration(), 100.0 * FootContactRatio(spec, *spliced), path->c_str());
-  return 0;
+  return WriteMadeClip(spec, out_dir, *turned);
 }
 
 }  // namespace
@@ -417,13 +452,14 @@ int Splice(const std::vector<std::string>& inputs, const HumanoidSpec& spec, con
 
 int main(int argc, char** argv) {
   absl::SetProgramUsageMessage(
-      "imports, inspects, views and splices motion clips, and makes held reach poses.\n"
+      "imports, inspects, views, splices and turns motion clips, and makes held reach poses.\n"
       "  modskill-motion import IN... --out DIR [--labels CSV] [--fps 30] [--floor window|stance]\n"
       "  modskill-motion inspect FILE... [--fps 30] [--floor window|stance]\n"
       "  modskill-motion view CLIP... --html OUT.html  (CLIP: a motion file or a library clip name)\n"
       "  modskill-motion splice BASE SOURCE --parts R_Arm,L_Arm --name NAME --out DIR [--timing stretch|clip|hold [--hold_at 0.5]]\n"
       "  modskill-motion reach BASE --name NAME --out DIR [--count 32] [--seed 1] [--hand R_Hand] [--box_size 2] "
       "[--box_center 0,0,1]\n"
+      "  modskill-motion turn BASE --yaw_rate 45 --name NAME --out DIR  (BASE's path bent at 45 deg/s, to the left)\n"
       "Formats: AMASS/SMPL(-H) .npz, CMU .bvh, DeepMimic humanoid3d .txt, native .msclip");
   std::vector<char*> args = absl::ParseCommandLine(argc, argv);
   if (args.size() < 3) {
@@ -431,7 +467,8 @@ int main(int argc, char** argv) {
                  "usage: modskill-motion import IN... --out DIR | modskill-motion inspect FILE... | "
                  "modskill-motion view CLIP... --html OUT.html | "
                  "modskill-motion splice BASE SOURCE --parts P,... --name NAME --out DIR | "
-                 "modskill-motion reach BASE --name NAME --out DIR\n");
+                 "modskill-motion reach BASE --name NAME --out DIR | "
+                 "modskill-motion turn BASE --yaw_rate DEG_PER_S --name NAME --out DIR\n");
     return 2;
   }
   const std::string command = args[1];
@@ -452,7 +489,8 @@ int main(int argc, char** argv) {
   if (command == "view") return modskill::View(files, *spec, *options);
   if (command == "splice") return modskill::Splice(files, *spec, *options);
   if (command == "reach") return modskill::Reach(files, *spec, *options);
-  std::fprintf(stderr, "error: unknown command '%s' (expected import, inspect, view, splice or reach)\n",
+  if (command == "turn") return modskill::Turn(files, *spec, *options);
+  std::fprintf(stderr, "error: unknown command '%s' (expected import, inspect, view, splice, reach or turn)\n",
                command.c_str());
   return 2;
 }

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# modskill-motion splice as a user runs it: the walk with the punch's arms written to a directory,
-# read back by inspect, and bad input refused with a message naming what is wrong and nothing
-# written.  Usage: run_motion_splice_cli_test.sh BUILD_DIR
+# modskill-motion splice and turn as a user runs them: the walk with the punch's arms, and the walk
+# turning left, written to a directory, read back by inspect, and bad input refused with a message
+# naming what is wrong and nothing written.  Usage: run_motion_splice_cli_test.sh BUILD_DIR
 set -euo pipefail
 motion="$1/server/modskill-motion"
 out="$(mktemp -d)"
@@ -28,4 +28,20 @@ expect_error "splice name '../x'" deepmimic_walk deepmimic_punch --parts R_Arm -
 expect_error "timing 'loop'" deepmimic_walk deepmimic_punch --parts R_Arm --name x --timing loop
 expect_error "--layout" deepmimic_walk deepmimic_punch --parts R_Arm --name x --layout 9part
 expect_error "needs BASE SOURCE" deepmimic_walk --parts R_Arm --name x
-echo "modskill-motion splice: ok"
+
+"$motion" turn deepmimic_walk --yaw_rate 45 --name walk_left_45 --out "$out" > "$out/turn.txt"
+grep -q "walk_left_45 .* 38 frames" "$out/turn.txt" || fail "turn output: $(cat "$out/turn.txt")"
+"$motion" inspect "$out/walk_left_45.msclip" > "$out/inspect_turn.txt"
+grep -q "label .*turning +45 deg/s" "$out/inspect_turn.txt" || fail "turn label: $(cat "$out/inspect_turn.txt")"
+expect_turn_error() {  # expect_turn_error PATTERN ARGS...
+  local pattern="$1"; shift
+  if "$motion" turn "$@" --out "$out/bad" 2> "$out/err.txt"; then fail "accepted: turn $*"; fi
+  grep -q -- "$pattern" "$out/err.txt" || fail "for 'turn $*' expected '$pattern', got: $(cat "$out/err.txt")"
+  [ -z "$(ls -A "$out/bad" 2>/dev/null)" ] || fail "'turn $*' wrote $(ls "$out/bad")"
+}
+expect_turn_error "--yaw_rate 200" deepmimic_walk --yaw_rate 200 --name x
+expect_turn_error "--yaw_rate nan" deepmimic_walk --yaw_rate nan --name x
+expect_turn_error "turn name '../x'" deepmimic_walk --yaw_rate 30 --name ../x
+expect_turn_error "no clip of that name" no_such_clip --yaw_rate 30 --name x
+expect_turn_error "needs BASE --yaw_rate" deepmimic_walk deepmimic_jog --yaw_rate 30 --name x
+echo "modskill-motion splice and turn: ok"
