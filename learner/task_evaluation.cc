@@ -7,6 +7,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "absl/strings/str_join.h"
 #include "learner/policy_import.h"
 #include "learner/task_return.h"
 #include "learner/wire_torch.h"
@@ -88,6 +89,9 @@ absl::StatusOr<TaskEvaluationRow> RunEpisodes(SimulationClient& client, Imported
   const int n = options.episodes;
   const TaskReturn task_return({spec.reward_terms().begin(), spec.reward_terms().end()}, config.max_episode_steps());
   std::vector<double> goal(n, 0.0), length(n, 0.0);
+  const int64_t goal_terms = static_cast<int64_t>(task_return.goal_columns().size());
+  torch::Tensor term_sums = torch::zeros({n, goal_terms}, torch::kFloat64);
+  const torch::Tensor goal_columns = torch::tensor(task_return.goal_columns(), torch::kInt64);
   std::vector<bool> ended(n, false);
   EpisodeEnds ends;
   int remaining = n;
@@ -112,6 +116,8 @@ absl::StatusOr<TaskEvaluationRow> RunEpisodes(SimulationClient& client, Imported
     if (!done.ok()) return done.status();
     if (!causes.ok()) return causes.status();
     const torch::Tensor goal_reward = task_return.GoalReward(*terms).contiguous();
+    const torch::Tensor running = torch::tensor(std::vector<uint8_t>(ended.begin(), ended.end())).logical_not();
+    term_sums += terms->to(torch::kFloat64).index_select(1, goal_columns) * running.unsqueeze(1);
     for (int i = 0; i < n; ++i) {
       if (ended[i]) continue;
       goal[i] += goal_reward.data_ptr<double>()[i];
@@ -125,7 +131,12 @@ absl::StatusOr<TaskEvaluationRow> RunEpisodes(SimulationClient& client, Imported
   (void)(*stream)->Close();
   std::vector<double> returns;
   for (double g : goal) returns.push_back(task_return.Normalize(g));
-  return TaskEvaluationRow{name, MeanOrNan(returns), MeanOrNan(length), n, ends};
+  TaskEvaluationRow row{name, MeanOrNan(returns), MeanOrNan(length), n, ends, {}};
+  const torch::Tensor term_means = term_sums.mean(0);
+  for (int64_t k = 0; k < goal_terms; ++k) {
+    row.by_term.emplace_back(task_return.goal_names()[k], task_return.Normalize(term_means[k].item<double>()));
+  }
+  return row;
 }
 
 }  // namespace
@@ -230,11 +241,14 @@ std::string TaskEvaluationReport::ToJson() const {
     const std::vector<std::string> names = EpisodeEnds::Names();
     const std::vector<int> counts = row.ends.Counts();
     for (size_t c = 0; c < names.size(); ++c) ended_by[names[c]] = counts[c];
+    nlohmann::json by_term = nlohmann::json::object();
+    for (const auto& [term, share] : row.by_term) by_term[term] = share;
     json["runs"].push_back({{"z_source", row.z_source},
                             {"mean_normalized_return", row.mean_normalized_return},
                             {"mean_episode_length", row.mean_episode_length},
                             {"episodes", row.episodes},
-                            {"ended_by", ended_by}});
+                            {"ended_by", ended_by},
+                            {"by_term", by_term}});
   }
   return json.dump(1);
 }
@@ -243,11 +257,14 @@ std::string TaskEvaluationReport::ToMarkdown() const {
   std::string md = absl::StrFormat(
       "Task %s, %s: the same frozen skills driven by different z. Normalized return: per episode, the sum of the "
       "reward terms other than energy divided by %d steps.\n\n"
-      "| z for the skills | normalized return | episode length (steps) | episodes | ended by |\n|---|---|---|---|---|\n",
+      "| z for the skills | normalized return | by term | episode length (steps) | episodes | ended by |\n"
+      "|---|---|---|---|---|---|\n",
       task, checkpoint, episode_steps);
   for (const TaskEvaluationRow& row : rows) {
-    absl::StrAppendFormat(&md, "| %s | %.3f | %.1f | %d | %s |\n", row.z_source, row.mean_normalized_return,
-                          row.mean_episode_length, row.episodes, row.ends.Summary());
+    std::vector<std::string> shares;
+    for (const auto& [term, share] : row.by_term) shares.push_back(absl::StrFormat("%s %.3f", term, share));
+    absl::StrAppendFormat(&md, "| %s | %.3f | %s | %.1f | %d | %s |\n", row.z_source, row.mean_normalized_return,
+                          absl::StrJoin(shares, ", "), row.mean_episode_length, row.episodes, row.ends.Summary());
   }
   return md;
 }

@@ -8,6 +8,7 @@
 #define MODSKILL_LEARNER_TASK_EVALUATION_H_
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <torch/torch.h>
@@ -39,6 +40,9 @@ struct TaskEvaluationRow {
   double mean_episode_length = 0;  // steps
   int episodes = 0;
   EpisodeEnds ends;  // why they ended (empty where the server does not say)
+  // Each goal term's part of the mean normalized return (they add up to it), e.g. strike's tip
+  // term against its approach term: what the return was earned by.
+  std::vector<std::pair<std::string, double>> by_term;
 };
 
 struct TaskEvaluationReport {

@@ -7,7 +7,11 @@ namespace modskill::learner {
 TaskReturn::TaskReturn(const std::vector<std::string>& reward_terms, int max_episode_steps)
     : episode_steps_(TaskEpisodeSteps(max_episode_steps)) {
   std::vector<double> goal;
-  for (const std::string& term : reward_terms) goal.push_back(term == "energy" ? 0.0 : 1.0);
+  for (const std::string& term : reward_terms) {
+    const bool counts = term != "energy";
+    goal.push_back(counts ? 1.0 : 0.0);
+    if (counts) goal_columns_.push_back(static_cast<int64_t>(goal.size()) - 1), goal_names_.push_back(term);
+  }
   goal_terms_ = torch::tensor(goal, torch::kFloat64);
 }
 

@@ -24,9 +24,14 @@ class TaskReturn {
   // An episode's summed GoalReward -> its normalized return.
   double Normalize(double goal_return) const { return goal_return / episode_steps_; }
   int episode_steps() const { return episode_steps_; }
+  // The columns GoalReward sums, and their names, in the session's order.
+  const std::vector<int64_t>& goal_columns() const { return goal_columns_; }
+  const std::vector<std::string>& goal_names() const { return goal_names_; }
 
  private:
   torch::Tensor goal_terms_;  // [K] float64: 1 for every term but energy
+  std::vector<int64_t> goal_columns_;
+  std::vector<std::string> goal_names_;
   int episode_steps_;
 };
 

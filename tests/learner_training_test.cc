@@ -681,7 +681,16 @@ TEST(LearnerTrainingTest, SteerPolicyTrainsOverATrackersFrozenSkills) {
     // Every episode says why it ended: the 30-step limit or a fall, nothing unreported.
     EXPECT_EQ(row.ends.total(), 4) << row.z_source;
     EXPECT_EQ(row.ends.count(v1::END_CAUSE_TIME) + row.ends.count(v1::END_CAUSE_FALL), 4) << row.z_source;
+    // Steer's goal terms split the return; the energy column is no part of it.
+    ASSERT_EQ(row.by_term.size(), 2u) << row.z_source;
+    EXPECT_EQ(row.by_term[0].first, "speed");
+    EXPECT_EQ(row.by_term[1].first, "facing");
+    EXPECT_NEAR(row.by_term[0].second + row.by_term[1].second, row.mean_normalized_return, 1e-6) << row.z_source;
+    EXPECT_GT(row.by_term[0].second, 0.0) << row.z_source;
   }
+  EXPECT_THAT(report->ToMarkdown(), HasSubstr("| by term |"));
+  EXPECT_THAT(report->ToMarkdown(), HasSubstr("speed 0."));
+  EXPECT_THAT(report->ToJson(), HasSubstr("\"by_term\""));
   EXPECT_THAT(report->ToMarkdown(), HasSubstr("| ended by |"));
   EXPECT_THAT(report->ToJson(), HasSubstr("\"ended_by\""));
   EXPECT_THAT(report->ToMarkdown(), HasSubstr("random unit z"));
