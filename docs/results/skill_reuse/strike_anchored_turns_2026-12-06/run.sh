@@ -36,3 +36,9 @@ S="--task strike --task_log_std -2.5 --learning_rate 1e-4 --energy_weight 0 --up
 bench/task_bench.sh --out runs/strike_turns --skills runs/turn_skills/straight/policy.pt --minutes 40 --motions walk_arm_forward \
   --eval_episodes 64 --server_flags "--motions runs/strike_lib" --skills_for turns=runs/turn_skills/turns/policy.pt \
   straight="$S" turns="$S"
+# (6) the head's step size over the turning skills, 20 minutes each, side by side (the session's
+#     full build ran beside them).
+S="--task strike --energy_weight 0 --update_threads 1"
+bench/task_bench.sh --out runs/strike_step --skills runs/turn_skills/turns/policy.pt --minutes 20 --motions walk_arm_forward \
+  --eval_episodes 64 --server_flags "--motions runs/strike_lib" \
+  lr1e-4="$S --task_log_std -2.5 --learning_rate 1e-4" lr3e-4="$S --task_log_std -2 --learning_rate 3e-4"
