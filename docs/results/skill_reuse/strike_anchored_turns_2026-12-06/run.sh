@@ -42,3 +42,8 @@ S="--task strike --energy_weight 0 --update_threads 1"
 bench/task_bench.sh --out runs/strike_step --skills runs/turn_skills/turns/policy.pt --minutes 20 --motions walk_arm_forward \
   --eval_episodes 64 --server_flags "--motions runs/strike_lib" \
   lr1e-4="$S --task_log_std -2.5 --learning_rate 1e-4" lr3e-4="$S --task_log_std -2 --learning_rate 3e-4"
+# (7) steer over the turning skills against the looping walk skills, 20 minutes each, side by side.
+S="--task steer --task_log_std -3 --learning_rate 5e-5 --update_threads 1"
+bench/task_bench.sh --out runs/steer_turns --skills data/policies/walk_proprio_loop/policy.pt --minutes 20 \
+  --motions deepmimic_walk --eval_episodes 64 --server_flags "--motions runs/strike_lib" \
+  --skills_for turns=runs/turn_skills/turns/policy.pt loop="$S" turns="$S"
