@@ -88,10 +88,8 @@ absl::StatusOr<TaskEvaluationRow> RunEpisodes(SimulationClient& client, Imported
   const v1::EnvSpec& spec = (*stream)->spec();
   const int n = options.episodes;
   const TaskReturn task_return({spec.reward_terms().begin(), spec.reward_terms().end()}, config.max_episode_steps());
-  std::vector<double> goal(n, 0.0), length(n, 0.0);
-  const int64_t goal_terms = static_cast<int64_t>(task_return.goal_columns().size());
-  torch::Tensor term_sums = torch::zeros({n, goal_terms}, torch::kFloat64);
-  const torch::Tensor goal_columns = torch::tensor(task_return.goal_columns(), torch::kInt64);
+  const size_t goal_terms = task_return.goal_names().size();
+  std::vector<double> length(n, 0.0), term_sums(n * goal_terms, 0.0);  // [n, G]: each episode's goal terms summed
   std::vector<bool> ended(n, false);
   EpisodeEnds ends;
   int remaining = n;
@@ -115,12 +113,11 @@ absl::StatusOr<TaskEvaluationRow> RunEpisodes(SimulationClient& client, Imported
     if (!terms.ok()) return terms.status();
     if (!done.ok()) return done.status();
     if (!causes.ok()) return causes.status();
-    const torch::Tensor goal_reward = task_return.GoalReward(*terms).contiguous();
-    const torch::Tensor running = torch::tensor(std::vector<uint8_t>(ended.begin(), ended.end())).logical_not();
-    term_sums += terms->to(torch::kFloat64).index_select(1, goal_columns) * running.unsqueeze(1);
+    const torch::Tensor step_terms = task_return.GoalTerms(*terms).contiguous();
+    const double* step_values = step_terms.data_ptr<double>();
     for (int i = 0; i < n; ++i) {
       if (ended[i]) continue;
-      goal[i] += goal_reward.data_ptr<double>()[i];
+      for (size_t k = 0; k < goal_terms; ++k) term_sums[i * goal_terms + k] += step_values[i * goal_terms + k];
       length[i] += 1;
       if (done->data_ptr<float>()[i] > 0.5f) {
         ended[i] = true, --remaining;
@@ -129,13 +126,16 @@ absl::StatusOr<TaskEvaluationRow> RunEpisodes(SimulationClient& client, Imported
     }
   }
   (void)(*stream)->Close();
-  std::vector<double> returns;
-  for (double g : goal) returns.push_back(task_return.Normalize(g));
-  TaskEvaluationRow row{name, MeanOrNan(returns), MeanOrNan(length), n, ends, {}};
-  const torch::Tensor term_means = term_sums.mean(0);
-  for (int64_t k = 0; k < goal_terms; ++k) {
-    row.by_term.emplace_back(task_return.goal_names()[k], task_return.Normalize(term_means[k].item<double>()));
+  std::vector<double> returns(n, 0.0), term_shares(goal_terms, 0.0);
+  for (int i = 0; i < n; ++i) {
+    for (size_t k = 0; k < goal_terms; ++k) {
+      const double share = task_return.Normalize(term_sums[i * goal_terms + k]);
+      returns[i] += share;
+      term_shares[k] += share / n;
+    }
   }
+  TaskEvaluationRow row{name, MeanOrNan(returns), MeanOrNan(length), n, ends, {}};
+  for (size_t k = 0; k < goal_terms; ++k) row.by_term.emplace_back(task_return.goal_names()[k], term_shares[k]);
   return row;
 }
 

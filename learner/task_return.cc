@@ -5,20 +5,20 @@
 namespace modskill::learner {
 
 TaskReturn::TaskReturn(const std::vector<std::string>& reward_terms, int max_episode_steps)
-    : episode_steps_(TaskEpisodeSteps(max_episode_steps)) {
-  std::vector<double> goal;
-  for (const std::string& term : reward_terms) {
-    const bool counts = term != "energy";
-    goal.push_back(counts ? 1.0 : 0.0);
-    if (counts) goal_columns_.push_back(static_cast<int64_t>(goal.size()) - 1), goal_names_.push_back(term);
+    : num_terms_(static_cast<int64_t>(reward_terms.size())), episode_steps_(TaskEpisodeSteps(max_episode_steps)) {
+  std::vector<int64_t> columns;
+  for (size_t k = 0; k < reward_terms.size(); ++k) {
+    if (reward_terms[k] == "energy") continue;
+    columns.push_back(static_cast<int64_t>(k));
+    goal_names_.push_back(reward_terms[k]);
   }
-  goal_terms_ = torch::tensor(goal, torch::kFloat64);
+  goal_columns_ = torch::tensor(columns, torch::kInt64);
 }
 
-torch::Tensor TaskReturn::GoalReward(const torch::Tensor& terms) const {
-  TORCH_CHECK(terms.dim() == 2 && terms.size(1) == goal_terms_.size(0), "TaskReturn: expected reward terms [n, ",
-              goal_terms_.size(0), "], got ", terms.sizes());
-  return terms.to(torch::kFloat64).matmul(goal_terms_);
+torch::Tensor TaskReturn::GoalTerms(const torch::Tensor& terms) const {
+  TORCH_CHECK(terms.dim() == 2 && terms.size(1) == num_terms_, "TaskReturn: expected reward terms [n, ", num_terms_,
+              "], got ", terms.sizes());
+  return terms.to(torch::kFloat64).index_select(1, goal_columns_);
 }
 
 double MeanOrNan(const std::vector<double>& values) {

@@ -19,18 +19,19 @@ class TaskReturn {
   // reward_terms: the session's (EnvSpec.reward_terms); max_episode_steps 0: the default.
   TaskReturn(const std::vector<std::string>& reward_terms, int max_episode_steps);
 
-  // terms: [n, K] (StepResult.reward_terms) -> [n] float64, the sum of the non-energy terms.
-  torch::Tensor GoalReward(const torch::Tensor& terms) const;
+  // terms: [n, K] (StepResult.reward_terms) -> [n, G] float64, the non-energy terms (goal_names()).
+  torch::Tensor GoalTerms(const torch::Tensor& terms) const;
+  // terms: [n, K] -> [n] float64, the sum of the non-energy terms.
+  torch::Tensor GoalReward(const torch::Tensor& terms) const { return GoalTerms(terms).sum(1); }
   // An episode's summed GoalReward -> its normalized return.
   double Normalize(double goal_return) const { return goal_return / episode_steps_; }
   int episode_steps() const { return episode_steps_; }
-  // The columns GoalReward sums, and their names, in the session's order.
-  const std::vector<int64_t>& goal_columns() const { return goal_columns_; }
+  // The names of GoalTerms' columns, in the session's order.
   const std::vector<std::string>& goal_names() const { return goal_names_; }
 
  private:
-  torch::Tensor goal_terms_;  // [K] float64: 1 for every term but energy
-  std::vector<int64_t> goal_columns_;
+  int64_t num_terms_;            // K
+  torch::Tensor goal_columns_;   // [G] int64: every column but energy's
   std::vector<std::string> goal_names_;
   int episode_steps_;
 };

@@ -427,9 +427,10 @@ int Turn(const std::vector<std::string>& inputs, const HumanoidSpec& spec, const
     std::fprintf(stderr, "error: turn needs BASE --yaw_rate DEG_PER_S --name NAME --out DIR\n");
     return 2;
   }
-  const double degrees = absl::GetFlag(FLAGS_yaw_rate);
-  if (!(std::abs(degrees) <= 180.0)) {
-    std::fprintf(stderr, "error: --yaw_rate %g is not a finite rate within +-180 deg/s\n", degrees);
+  // TurnClip's own bound, checked here so that the message names the flag in its unit.
+  const double degrees = absl::GetFlag(FLAGS_yaw_rate), max_degrees = kMaxTurnRate * 180.0 / M_PI;
+  if (!(std::abs(degrees) <= max_degrees)) {
+    std::fprintf(stderr, "error: --yaw_rate %g is not a finite rate within +-%g deg/s\n", degrees, max_degrees);
     return 2;
   }
   std::optional<MotionLibrary> library;
