@@ -27,6 +27,26 @@ std::vector<torch::Tensor> TrainableParameters(ModSkillPolicyImpl& policy, Criti
   return parameters;
 }
 
+std::vector<torch::optim::OptimizerParamGroup> TrainableParameterGroups(ModSkillPolicyImpl& policy, CriticImpl& critic,
+                                                                        double learning_rate,
+                                                                        double critic_learning_rate) {
+  const auto group = [](std::vector<torch::Tensor> params, double rate) {
+    return torch::optim::OptimizerParamGroup(std::move(params), std::make_unique<torch::optim::AdamOptions>(rate));
+  };
+  std::vector<torch::optim::OptimizerParamGroup> groups;
+  if (critic_learning_rate <= 0) {
+    groups.push_back(group(TrainableParameters(policy, critic), learning_rate));
+    return groups;
+  }
+  std::vector<torch::Tensor> actor;
+  for (const torch::Tensor& p : policy.parameters()) {
+    if (p.requires_grad()) actor.push_back(p);
+  }
+  groups.push_back(group(std::move(actor), learning_rate));
+  groups.push_back(group(critic.parameters(), critic_learning_rate));
+  return groups;
+}
+
 int64_t MinibatchesPerEpoch(int64_t size, int64_t minibatch_size) {
   return size == 0 ? 0 : size / std::min<int64_t>(minibatch_size, size);
 }
@@ -37,7 +57,10 @@ PpoUpdateStats UpdateWithPpo(ModSkillPolicyImpl& policy, CriticImpl& critic, tor
                              const PpoBatch& batch, const PpoSettings& settings, torch::Generator& generator,
                              const GradientAverager& average) {
   PpoUpdateStats stats;
-  std::vector<torch::Tensor>& params = optimizer.param_groups()[0].params();
+  std::vector<torch::Tensor> params;
+  for (const torch::optim::OptimizerParamGroup& group : optimizer.param_groups()) {
+    params.insert(params.end(), group.params().begin(), group.params().end());
+  }
   std::vector<torch::Tensor> snapshot;
   for (const torch::Tensor& p : params) snapshot.push_back(p.detach().clone());
   const torch::Tensor log_std = policy.log_std();

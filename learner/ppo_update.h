@@ -60,10 +60,17 @@ struct PpoUpdateStats {
 // skills of a task policy), then the critic's.
 std::vector<torch::Tensor> TrainableParameters(ModSkillPolicyImpl& policy, CriticImpl& critic);
 
+// The same parameters as Adam's groups: one group at `learning_rate`, or with critic_learning_rate
+// > 0 two, the policy's (group 0) and the critic's (group 1) at their own rates.
+std::vector<torch::optim::OptimizerParamGroup> TrainableParameterGroups(ModSkillPolicyImpl& policy, CriticImpl& critic,
+                                                                        double learning_rate,
+                                                                        double critic_learning_rate);
+
 // Minibatch steps per epoch over `size` samples: whole minibatches of min(minibatch_size, size).
 int64_t MinibatchesPerEpoch(int64_t size, int64_t minibatch_size);
 
-// Runs settings.epochs epochs over `batch` with `optimizer` (built on TrainableParameters),
+// Runs settings.epochs epochs over `batch` with `optimizer` (built on TrainableParameters or
+// TrainableParameterGroups; gradients are clipped over all of its groups together),
 // minibatch order from `generator`; `average` (optional) averages the gradients across ranks.
 PpoUpdateStats UpdateWithPpo(ModSkillPolicyImpl& policy, CriticImpl& critic, torch::optim::Optimizer& optimizer,
                              const PpoBatch& batch, const PpoSettings& settings, torch::Generator& generator,

@@ -229,8 +229,9 @@ absl::Status Trainer::BuildNetworks(const v1::EnvSpec& spec) {
     if (absl::Status status = LoadSkills(); !status.ok()) return status;
   }
   // The skills' controllers are frozen: only what requires gradients is trained.
-  optimizer_ = std::make_unique<torch::optim::Adam>(TrainableParameters(*policy_, *critic_),
-                                                    torch::optim::AdamOptions(config_.learning_rate));
+  optimizer_ = std::make_unique<torch::optim::Adam>(
+      TrainableParameterGroups(*policy_, *critic_, config_.learning_rate, config_.critic_learning_rate),
+      torch::optim::AdamOptions(config_.learning_rate));
   discriminator_optimizer_ = std::make_unique<torch::optim::Adam>(
       discriminator_->parameters(), torch::optim::AdamOptions(config_.discriminator_learning_rate));
   return absl::OkStatus();

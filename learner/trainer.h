@@ -48,7 +48,8 @@ struct IterationStats {
   double mean_episode_return = 0;  // task reward, episodes completed recently
   double mean_episode_length = 0;
   double reward_terms[8] = {};
-  double learning_rate = 0;  // the policy and critic step size of this iteration's update
+  double learning_rate = 0;  // the policy's (and the critic's) step size of this iteration's update
+  double critic_learning_rate = 0;  // with --critic_learning_rate: the critic's, else 0
   double policy_loss = 0, value_loss = 0, approx_kl = 0, clip_fraction = 0;
   double teacher_weight = 0, teacher_loss = 0;  // --task_teacher: this update's weight, its unweighted loss
   double discriminator_loss = 0, expert_logit = 0, policy_logit = 0, gradient_penalty = 0;

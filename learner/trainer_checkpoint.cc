@@ -38,6 +38,7 @@ absl::StatusOr<std::string> Trainer::SerializeState() {
     discriminator_optimizer_->save(discriminator_optimizer);
     archive.write("optimizer", optimizer);
     archive.write("discriminator_optimizer", discriminator_optimizer);
+    archive.write("optimizer_groups", torch::tensor(static_cast<int64_t>(optimizer_->param_groups().size())));
     archive.write("iteration", torch::tensor(static_cast<int64_t>(iteration_)));
     archive.write("env_steps", torch::tensor(static_cast<int64_t>(env_steps_)));
     archive.write("obs_size", torch::tensor(layout_.obs_size));
@@ -195,6 +196,15 @@ absl::Status Trainer::RestoreState(torch::serialize::InputArchive& archive, cons
     load_module("discriminator", *discriminator_);
     load_module("obs_norm", *obs_norm_);
     load_module("amp_norm", *amp_norm_);
+    // Checkpoints from before --critic_learning_rate have one group.
+    torch::Tensor groups = torch::tensor(int64_t{1});
+    archive.try_read("optimizer_groups", groups);
+    if (groups.item<int64_t>() != static_cast<int64_t>(optimizer_->param_groups().size())) {
+      return absl::FailedPreconditionError(absl::StrCat(
+          path, ": trained ", groups.item<int64_t>() == 2 ? "with" : "without",
+          " --critic_learning_rate (the critic's own Adam group); resume it ",
+          groups.item<int64_t>() == 2 ? "with" : "without", " the flag"));
+    }
     torch::serialize::InputArchive optimizer, discriminator_optimizer;
     archive.read("optimizer", optimizer);
     archive.read("discriminator_optimizer", discriminator_optimizer);

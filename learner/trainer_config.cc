@@ -192,6 +192,9 @@ absl::Status TrainerConfig::Validate() const {
   if (!(learning_rate_floor > 0 && learning_rate_floor <= 1)) {
     return bad("learning_rate_floor", learning_rate_floor, "must be in (0, 1]");
   }
+  if (!(critic_learning_rate >= 0 && critic_learning_rate < 1)) {
+    return bad("critic_learning_rate", critic_learning_rate, "must be in [0, 1) (0: --learning_rate)");
+  }
   if (!(gamma > 0 && gamma <= 1)) return bad("gamma", gamma, "must be in (0, 1]");
   if (!(lambda >= 0 && lambda <= 1)) return bad("lambda", lambda, "must be in [0, 1]");
   if (amp_samples < 1) return bad("amp_samples", amp_samples, "must be >= 1");
@@ -302,6 +305,7 @@ std::string TrainerConfig::ToJson() const {
   json["learning_rate"] = learning_rate;
   json["learning_rate_decay_steps"] = learning_rate_decay_steps;
   json["learning_rate_floor"] = learning_rate_floor;
+  json["critic_learning_rate"] = critic_learning_rate;
   json["gamma"] = gamma;
   json["lambda"] = lambda;
   json["clip_ratio"] = clip_ratio;

@@ -126,6 +126,9 @@ struct TrainerConfig {
   // (learning_rate_decay.h); 0: constant.
   int64_t learning_rate_decay_steps = 0;
   double learning_rate_floor = 0.1;
+  // The critic's own Adam step size (ProtoMotions: actor 2e-5, critic 1e-4); it decays with
+  // learning_rate. 0: the critic shares learning_rate (one parameter group, as before).
+  double critic_learning_rate = 0;
   double gamma = 0.99;
   double lambda = 0.95;
   double clip_ratio = 0.2;

@@ -62,6 +62,7 @@ std::vector<SharedSetting> SharedSettings(const TrainerConfig& c) {
       {"learning_rate", Text(c.learning_rate)},
       {"learning_rate_decay_steps", Text(c.learning_rate_decay_steps)},
       {"learning_rate_floor", Text(c.learning_rate_floor)},
+      {"critic_learning_rate", Text(c.critic_learning_rate)},
       {"gamma", Text(c.gamma)},
       {"lambda", Text(c.lambda)},
       {"clip_ratio", Text(c.clip_ratio)},

@@ -105,6 +105,10 @@ absl::Status Trainer::UpdatePolicy(const TrainingBatch& batch, IterationStats* s
       LearningRateDecay{config_.learning_rate, config_.learning_rate_decay_steps, config_.learning_rate_floor}.RateAt(
           env_steps_);
   SetLearningRate(*optimizer_, stats->learning_rate);
+  if (config_.critic_learning_rate > 0) {  // group 1, the critic's, decays by the same fraction
+    stats->critic_learning_rate = config_.critic_learning_rate * stats->learning_rate / config_.learning_rate;
+    static_cast<torch::optim::AdamOptions&>(optimizer_->param_groups()[1].options()).lr(stats->critic_learning_rate);
+  }
   PpoSettings settings;
   settings.epochs = config_.epochs;
   settings.minibatch_size = config_.minibatch_size;

@@ -372,6 +372,44 @@ TEST(LearnerTrainingTest, LearningRateDecaysOverEnvStepsAcrossAResume) {
   server->Shutdown(absl::Seconds(1));
 }
 
+// --critic_learning_rate: the critic steps at its own rate, the policy at --learning_rate; a
+// checkpoint resumes only with the same optimizer groups, and says which flag differs.
+TEST(LearnerTrainingTest, CriticLearningRateIsTheCriticsOwnStepSize) {
+  auto server = StartTestServer();
+  TrainerConfig config = SmallConfig({server->port()}, RunDir("critic_learning_rate"));
+  config.iterations = 1;
+  config.learning_rate = 1e-9;
+  config.critic_learning_rate = 1e-3;
+  auto trainer = Trainer::Create(config);
+  ASSERT_TRUE(trainer.ok()) << trainer.status();
+  const auto copy = [](const std::vector<torch::Tensor>& params) {
+    std::vector<torch::Tensor> copies;
+    for (const torch::Tensor& p : params) copies.push_back(p.detach().clone());
+    return copies;
+  };
+  const auto largest_change = [](const std::vector<torch::Tensor>& before, const std::vector<torch::Tensor>& after) {
+    double largest = 0;
+    for (size_t i = 0; i < before.size(); ++i) {
+      largest = std::max(largest, (after[i] - before[i]).abs().max().item<double>());
+    }
+    return largest;
+  };
+  const std::vector<torch::Tensor> policy_before = copy((*trainer)->policy()->parameters());
+  const std::vector<torch::Tensor> critic_before = copy((*trainer)->critic()->parameters());
+  ASSERT_TRUE((*trainer)->Run([](const IterationStats&) {}).ok());
+  EXPECT_DOUBLE_EQ((*trainer)->history().back().critic_learning_rate, 1e-3);
+  EXPECT_LT(largest_change(policy_before, (*trainer)->policy()->parameters()), 1e-6);
+  EXPECT_GT(largest_change(critic_before, (*trainer)->critic()->parameters()), 1e-5);
+
+  config.resume = true;
+  config.critic_learning_rate = 0;
+  auto without = Trainer::Create(config);
+  ASSERT_FALSE(without.ok());
+  EXPECT_EQ(without.status().code(), absl::StatusCode::kFailedPrecondition);
+  EXPECT_THAT(without.status().message(), HasSubstr("--critic_learning_rate"));
+  server->Shutdown(absl::Seconds(1));
+}
+
 class ServerFailoverTest : public ::testing::TestWithParam<bool> {};
 
 // Both collection modes: sequential, and collecting on its own thread during the update (where a
@@ -477,6 +515,8 @@ TEST(LearnerTrainingTest, BadConfigurationsAreClearErrors) {
       {[](TrainerConfig* c) { c->learning_rate_floor = 0; }, "--learning_rate_floor"},
       {[](TrainerConfig* c) { c->learning_rate_floor = 1.5; }, "--learning_rate_floor"},
       {[&](TrainerConfig* c) { c->learning_rate_floor = nan; }, "--learning_rate_floor"},
+      {[](TrainerConfig* c) { c->critic_learning_rate = -1e-4; }, "--critic_learning_rate"},
+      {[&](TrainerConfig* c) { c->critic_learning_rate = nan; }, "--critic_learning_rate"},
       {[](TrainerConfig* c) { c->energy_weight = -1; }, "--energy_weight"},
       {[&](TrainerConfig* c) { c->energy_weight = nan; }, "--energy_weight"},
       {[](TrainerConfig* c) { c->model.amp_frames = -2; }, "--amp_frames"},

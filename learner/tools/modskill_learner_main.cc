@@ -133,6 +133,8 @@ ABSL_FLAG(double, learning_rate, 0, "Adam learning rate (0: the preset's)");
 ABSL_FLAG(int64_t, learning_rate_decay_steps, 0,
           "decay --learning_rate linearly to --learning_rate_floor x it over this many env steps (0: constant)");
 ABSL_FLAG(double, learning_rate_floor, 0.1, "the decayed learning rate's final fraction of --learning_rate, in (0, 1]");
+ABSL_FLAG(double, critic_learning_rate, 0,
+          "the critic's own Adam learning rate, decayed with --learning_rate (0: the critic uses --learning_rate)");
 ABSL_FLAG(double, log_std, 0, "fixed log standard deviation of the Gaussian policy (0: the preset's)");
 ABSL_FLAG(double, amp_reward_weight, -1,
           "weight of the AMP style reward (task: 1 - this); -1: tracking runs the preset's (small 0.2, paper 0.5), "
@@ -471,6 +473,7 @@ absl::StatusOr<TrainerConfig> ConfigFromFlags(const std::string& token) {
   if (absl::GetFlag(FLAGS_learning_rate) > 0) config->learning_rate = absl::GetFlag(FLAGS_learning_rate);
   config->learning_rate_decay_steps = absl::GetFlag(FLAGS_learning_rate_decay_steps);
   config->learning_rate_floor = absl::GetFlag(FLAGS_learning_rate_floor);
+  config->critic_learning_rate = absl::GetFlag(FLAGS_critic_learning_rate);
   if (absl::GetFlag(FLAGS_log_std) != 0) config->model.log_std = absl::GetFlag(FLAGS_log_std);
   double amp_weight = absl::GetFlag(FLAGS_amp_reward_weight);
   // The skill-reuse heads were measured at PHC's 0.5 / 0.5 (README, "Skill reuse").
@@ -535,6 +538,7 @@ std::vector<std::string> ProgressColumns(const Trainer& trainer) {
     columns.push_back(column);
   }
   if (!IsTrackingTask(trainer.config().task)) columns.push_back("normalized_return");
+  if (trainer.config().critic_learning_rate > 0) columns.push_back("critic_learning_rate");
   if (!trainer.config().task_teacher.empty()) columns.insert(columns.end(), {"teacher_weight", "teacher_loss"});
   if (trainer.config().data_parallel.world_size > 1) columns.insert(columns.end(), {"allreduce_s", "allreduce_bytes"});
   return columns;
@@ -550,6 +554,7 @@ std::vector<double> ProgressRow(const IterationStats& s, double elapsed, const T
                          s.termination_distance, s.tracked_share, s.collect_seconds, s.update_seconds,
                          double(s.policy_lag), s.learning_rate});
   if (!IsTrackingTask(trainer.config().task)) row.push_back(s.normalized_return);
+  if (trainer.config().critic_learning_rate > 0) row.push_back(s.critic_learning_rate);
   if (!trainer.config().task_teacher.empty()) row.insert(row.end(), {s.teacher_weight, s.teacher_loss});
   if (trainer.config().data_parallel.world_size > 1) row.insert(row.end(), {s.allreduce_seconds, double(s.allreduce_bytes)});
   return row;
