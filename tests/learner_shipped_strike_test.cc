@@ -6,8 +6,7 @@
 
 #include <gtest/gtest.h>
 
-#include "learner/policy_import.h"
-#include "learner/task_evaluation.h"
+#include "learner/task_checkpoint_evaluation.h"
 #include "tests/server_fixture.h"
 
 namespace modskill::learner {
@@ -20,29 +19,17 @@ TEST(ShippedStrikePolicyTest, ItsHeadEarnsMoreThanRandomZAndStaysUpLonger) {
   auto client = ConnectTo(*server);
   auto added = client->AddMotionFiles({kShipped + "/motions/walk_arm_forward.msclip"});
   ASSERT_TRUE(added.ok()) << added.status();
-  auto exported = ReadExportedPolicy(kShipped + "/head/policy.pt");
-  ASSERT_TRUE(exported.ok()) << exported.status();
-  ASSERT_EQ(exported->spec.action.mode, ActionMode::kResidual);
-
-  TaskEvaluationOptions options;
-  options.session.set_task("strike");
-  options.session.add_motions("walk_arm_forward");
-  options.session.set_action_mode(v1::RESIDUAL);
-  options.session.set_residual_scale(static_cast<float>(exported->spec.action.residual_scale));
-  options.session.set_termination(v1::EVALUATION);
-  options.session.set_max_episode_steps(120);
-  options.episodes = 8;
-  options.seed = 7;
-  v1::SessionConfig probe = options.session;
-  probe.set_num_envs(1);
-  auto stream = client->OpenSession(probe);
-  ASSERT_TRUE(stream.ok()) << stream.status();
-  const v1::EnvSpec spec = (*stream)->spec();
-  (void)(*stream)->Close();
-
-  auto imported = ImportTaskPolicy(kShipped + "/head/policy.pt", spec);
-  ASSERT_TRUE(imported.ok()) << imported.status();
-  auto report = EvaluateTaskPolicy(*client, *imported, "strike_turns", options);
+  // As data/policies/README.md evaluates it (modskill-learner --eval --task strike), shorter.
+  TaskCheckpointEvaluation request;
+  request.checkpoint = kShipped + "/head/policy.pt";
+  request.task = "strike";
+  request.motions = {"walk_arm_forward"};
+  request.skills = kShipped + "/skills/policy.pt";
+  request.max_episode_steps = 120;
+  request.episodes = 8;
+  request.seed = 7;
+  request.baselines = true;
+  auto report = EvaluateTaskCheckpoint(*client, request);
   ASSERT_TRUE(report.ok()) << report.status();
   ASSERT_GE(report->rows.size(), 2u);
   const TaskEvaluationRow& head = report->rows[0];
@@ -51,6 +38,23 @@ TEST(ShippedStrikePolicyTest, ItsHeadEarnsMoreThanRandomZAndStaysUpLonger) {
   EXPECT_GT(head.mean_normalized_return, 1.5 * random.mean_normalized_return)
       << report->ToMarkdown();
   EXPECT_GT(head.mean_episode_length, 1.5 * random.mean_episode_length) << report->ToMarkdown();
+}
+
+// Skills the head was not trained over are refused before any episode runs, naming --skills.
+TEST(ShippedStrikePolicyTest, OtherSkillsThanTheHeadsAreRefused) {
+  auto server = StartTestServer();
+  auto client = ConnectTo(*server);
+  auto added = client->AddMotionFiles({kShipped + "/motions/walk_arm_forward.msclip"});
+  ASSERT_TRUE(added.ok()) << added.status();
+  TaskCheckpointEvaluation request;
+  request.checkpoint = kShipped + "/head/policy.pt";
+  request.task = "strike";
+  request.motions = {"walk_arm_forward"};
+  request.skills = std::string(MODSKILL_REPO_DIR) + "/data/policies/walk_proprio_loop/policy.pt";
+  request.episodes = 2;
+  auto report = EvaluateTaskCheckpoint(*client, request);
+  ASSERT_FALSE(report.ok());
+  EXPECT_NE(report.status().message().find("skills"), std::string::npos) << report.status();
 }
 
 }  // namespace

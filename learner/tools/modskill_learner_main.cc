@@ -38,6 +38,7 @@
 #include "learner/policy_import.h"
 #include "learner/server_discovery.h"
 #include "learner/skill_library.h"
+#include "learner/task_checkpoint_evaluation.h"
 #include "learner/task_evaluation.h"
 #include "learner/tensorboard_writer.h"
 #include "learner/tools/family_command.h"
@@ -313,58 +314,20 @@ absl::Status TaskSettingsFromFlags(TrainerConfig* config) {
 
 // A task policy and, with --task_baselines, the same skills under random and constant z.
 absl::StatusOr<TaskEvaluationReport> EvaluateTaskFromFlags(SimulationClient& client, const std::string& checkpoint) {
-  const std::string task = absl::GetFlag(FLAGS_task);
-  auto file = ReadExportedPolicy(checkpoint);
-  if (!file.ok()) return file.status();
-  auto described = client.Describe(file->spec.part_layout);
-  if (!described.ok()) return described.status();
-  if (absl::Status status = CheckTaskOffered(*described, task, client.server()); !status.ok()) return status;
-  TaskEvaluationOptions options;
-  options.session.set_part_layout(file->spec.part_layout);
-  options.session.set_task(task);
+  TaskCheckpointEvaluation request;
+  request.checkpoint = checkpoint;
+  request.task = absl::GetFlag(FLAGS_task);
+  request.motions = absl::GetFlag(FLAGS_motions);
   TrainerConfig goals;
   if (absl::Status status = TaskSettingsFromFlags(&goals); !status.ok()) return status;
-  WriteTaskSettings(goals, options.session.mutable_task_settings());
-  options.session.set_action_mode(ToWire(file->spec.action.mode));
-  if (file->spec.action.mode == ActionMode::kResidual) {
-    options.session.set_residual_scale(static_cast<float>(file->spec.action.residual_scale));
-  }
-  options.session.set_termination(v1::EVALUATION);
-  for (const std::string& clip : absl::GetFlag(FLAGS_motions)) options.session.add_motions(clip);
-  options.episodes = absl::GetFlag(FLAGS_eval_episodes);
-  options.seed = absl::GetFlag(FLAGS_seed);
-  options.baselines = absl::GetFlag(FLAGS_task_baselines);
-  // The task session's spec, from a one-env session.
-  v1::SessionConfig probe = options.session;
-  probe.set_num_envs(1);
-  auto stream = client.OpenSession(probe);
-  if (!stream.ok()) return stream.status();
-  const v1::EnvSpec task_spec = (*stream)->spec();
-  (void)(*stream)->Close();
-  auto imported = ImportTaskPolicy(checkpoint, task_spec);
-  if (!imported.ok()) return imported.status();
-  if (const std::string skills_path = absl::GetFlag(FLAGS_skills); !skills_path.empty()) {
-    auto skills = SkillLibrary::Load(skills_path);
-    if (!skills.ok()) return absl::Status(skills.status().code(), absl::StrCat("--skills: ", skills.status().message()));
-    if (absl::Status status = skills->CheckFits(*described, task_spec); !status.ok()) return status;
-    if (absl::Status status = skills->CheckSameControllers(*imported->policy); !status.ok()) return status;
-  }
-  std::optional<ReachTeacher> teacher;
-  if (const std::string path = absl::GetFlag(FLAGS_task_teacher); !path.empty()) {
-    if (task != "reach" || !imported->policy->uses_skill_prior() || !options.baselines) {
-      return absl::InvalidArgumentError("--task_teacher: with --eval, only for a reach policy with a skill prior and --task_baselines");
-    }
-    auto loaded = ReachTeacher::Load(path);
-    if (!loaded.ok()) return loaded.status();
-    auto mask = loaded->PartMask(imported->policy->layout(), imported->policy->config().embed_dim,
-                                 absl::GetFlag(FLAGS_task_parts));
-    if (!mask.ok()) return mask.status();
-    teacher = *std::move(loaded);
-    options.teacher = &*teacher;
-    options.teacher_parts = *std::move(mask);
-  }
-  LogLine("evaluating %s on %s, task %s, %d episodes per run", checkpoint, client.server(), task, options.episodes);
-  return EvaluateTaskPolicy(client, *imported, checkpoint, options);
+  WriteTaskSettings(goals, &request.task_settings);
+  request.episodes = absl::GetFlag(FLAGS_eval_episodes);
+  request.seed = absl::GetFlag(FLAGS_seed);
+  request.baselines = absl::GetFlag(FLAGS_task_baselines);
+  request.skills = absl::GetFlag(FLAGS_skills);
+  request.teacher = absl::GetFlag(FLAGS_task_teacher);
+  request.task_parts = absl::GetFlag(FLAGS_task_parts);
+  return EvaluateTaskCheckpoint(client, request);
 }
 
 int RunTaskEvaluation(const std::string& token) {
