@@ -229,12 +229,16 @@ absl::Status Trainer::BuildNetworks(const v1::EnvSpec& spec) {
     if (absl::Status status = LoadSkills(); !status.ok()) return status;
   }
   // The skills' controllers are frozen: only what requires gradients is trained.
-  optimizer_ = std::make_unique<torch::optim::Adam>(
-      TrainableParameterGroups(*policy_, *critic_, config_.learning_rate, config_.critic_learning_rate),
-      torch::optim::AdamOptions(config_.learning_rate));
+  BuildPolicyOptimizer();
   discriminator_optimizer_ = std::make_unique<torch::optim::Adam>(
       discriminator_->parameters(), torch::optim::AdamOptions(config_.discriminator_learning_rate));
   return absl::OkStatus();
+}
+
+void Trainer::BuildPolicyOptimizer() {
+  optimizer_ = std::make_unique<torch::optim::Adam>(
+      TrainableParameterGroups(*policy_, *critic_, config_.learning_rate, config_.critic_learning_rate),
+      torch::optim::AdamOptions(config_.learning_rate));
 }
 
 absl::Status Trainer::Run(const std::function<void(const IterationStats&)>& on_iteration,

@@ -224,6 +224,8 @@ class Trainer {
   AmpDiscriminator discriminator_{nullptr};
   RunningMeanStd obs_norm_{nullptr};
   RunningMeanStd amp_norm_{nullptr};
+  // Adam over the trainable policy and the critic: one group, or two with critic_learning_rate.
+  void BuildPolicyOptimizer();
   std::unique_ptr<torch::optim::Adam> optimizer_;
   std::unique_ptr<torch::optim::Adam> discriminator_optimizer_;
   int iteration_ = 0;

@@ -39,6 +39,7 @@ absl::StatusOr<std::string> Trainer::SerializeState() {
     archive.write("optimizer", optimizer);
     archive.write("discriminator_optimizer", discriminator_optimizer);
     archive.write("optimizer_groups", torch::tensor(static_cast<int64_t>(optimizer_->param_groups().size())));
+    archive.write("critic_learning_rate", torch::tensor(config_.critic_learning_rate, torch::kFloat64));
     archive.write("iteration", torch::tensor(static_cast<int64_t>(iteration_)));
     archive.write("env_steps", torch::tensor(static_cast<int64_t>(env_steps_)));
     archive.write("obs_size", torch::tensor(layout_.obs_size));
@@ -196,14 +197,23 @@ absl::Status Trainer::RestoreState(torch::serialize::InputArchive& archive, cons
     load_module("discriminator", *discriminator_);
     load_module("obs_norm", *obs_norm_);
     load_module("amp_norm", *amp_norm_);
-    // Checkpoints from before --critic_learning_rate have one group.
+    // Checkpoints from before --critic_learning_rate have one group and no critic rate of their own.
+    // A resume without the flag goes on at the checkpoint's rate; data-parallel ranks, which must
+    // agree on their optimizers, take it only from the flag.
     torch::Tensor groups = torch::tensor(int64_t{1});
     archive.try_read("optimizer_groups", groups);
+    torch::Tensor critic_rate = torch::tensor(0.0, torch::kFloat64);
+    archive.try_read("critic_learning_rate", critic_rate);
+    const double stored_rate = critic_rate.item<double>();
+    if (!config_.critic_learning_rate_given && !data_parallel_ && stored_rate != config_.critic_learning_rate) {
+      LogLine("%s: the critic was trained at --critic_learning_rate %g; resuming with it", path, stored_rate);
+      config_.critic_learning_rate = stored_rate;
+      BuildPolicyOptimizer();
+    }
     if (groups.item<int64_t>() != static_cast<int64_t>(optimizer_->param_groups().size())) {
       return absl::FailedPreconditionError(absl::StrCat(
-          path, ": trained ", groups.item<int64_t>() == 2 ? "with" : "without",
-          " --critic_learning_rate (the critic's own Adam group); resume it ",
-          groups.item<int64_t>() == 2 ? "with" : "without", " the flag"));
+          path, ": its optimizer has ", groups.item<int64_t>(), " parameter group(s), trained at --critic_learning_rate ",
+          stored_rate, " (0: the critic shared --learning_rate); resume it with that value"));
     }
     torch::serialize::InputArchive optimizer, discriminator_optimizer;
     archive.read("optimizer", optimizer);

@@ -403,10 +403,19 @@ TEST(LearnerTrainingTest, CriticLearningRateIsTheCriticsOwnStepSize) {
 
   config.resume = true;
   config.critic_learning_rate = 0;
+  config.critic_learning_rate_given = true;
   auto without = Trainer::Create(config);
   ASSERT_FALSE(without.ok());
   EXPECT_EQ(without.status().code(), absl::StatusCode::kFailedPrecondition);
   EXPECT_THAT(without.status().message(), HasSubstr("--critic_learning_rate"));
+
+  // Not given: the resumed run goes on at its checkpoint's rate.
+  config.critic_learning_rate_given = false;
+  auto resumed = Trainer::Create(config);
+  ASSERT_TRUE(resumed.ok()) << resumed.status();
+  ASSERT_TRUE((*resumed)->Run([](const IterationStats&) {}).ok());
+  EXPECT_DOUBLE_EQ((*resumed)->config().critic_learning_rate, 1e-3);
+  EXPECT_DOUBLE_EQ((*resumed)->history().back().critic_learning_rate, 1e-3);
   server->Shutdown(absl::Seconds(1));
 }
 

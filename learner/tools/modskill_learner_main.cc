@@ -134,8 +134,9 @@ ABSL_FLAG(double, learning_rate, 0, "Adam learning rate (0: the preset's)");
 ABSL_FLAG(int64_t, learning_rate_decay_steps, 0,
           "decay --learning_rate linearly to --learning_rate_floor x it over this many env steps (0: constant)");
 ABSL_FLAG(double, learning_rate_floor, 0.1, "the decayed learning rate's final fraction of --learning_rate, in (0, 1]");
-ABSL_FLAG(double, critic_learning_rate, 0,
-          "the critic's own Adam learning rate, decayed with --learning_rate (0: the critic uses --learning_rate)");
+ABSL_FLAG(double, critic_learning_rate, -1,
+          "the critic's own Adam learning rate, decayed with --learning_rate (0: the critic uses --learning_rate; "
+          "-1: the preset's, 1e-3 for small's tracking runs, else 0, or on --resume the checkpoint's)");
 ABSL_FLAG(double, log_std, 0, "fixed log standard deviation of the Gaussian policy (0: the preset's)");
 ABSL_FLAG(double, amp_reward_weight, -1,
           "weight of the AMP style reward (task: 1 - this); -1: tracking runs the preset's (small 0.2, paper 0.5), "
@@ -436,7 +437,12 @@ absl::StatusOr<TrainerConfig> ConfigFromFlags(const std::string& token) {
   if (absl::GetFlag(FLAGS_learning_rate) > 0) config->learning_rate = absl::GetFlag(FLAGS_learning_rate);
   config->learning_rate_decay_steps = absl::GetFlag(FLAGS_learning_rate_decay_steps);
   config->learning_rate_floor = absl::GetFlag(FLAGS_learning_rate_floor);
-  config->critic_learning_rate = absl::GetFlag(FLAGS_critic_learning_rate);
+  if (const double critic_rate = absl::GetFlag(FLAGS_critic_learning_rate); critic_rate != -1) {
+    config->critic_learning_rate = critic_rate;
+    config->critic_learning_rate_given = true;
+  } else if (absl::GetFlag(FLAGS_preset) == "small" && config->task == "tracking") {
+    config->critic_learning_rate = kSmallTrackingCriticLearningRate;
+  }
   if (absl::GetFlag(FLAGS_log_std) != 0) config->model.log_std = absl::GetFlag(FLAGS_log_std);
   double amp_weight = absl::GetFlag(FLAGS_amp_reward_weight);
   // The skill-reuse heads were measured at PHC's 0.5 / 0.5 (README, "Skill reuse").
