@@ -18,11 +18,21 @@ bool AllFinite(const std::vector<torch::Tensor>& tensors) {
 
 }  // namespace
 
-std::vector<torch::Tensor> TrainableParameters(ModSkillPolicyImpl& policy, CriticImpl& critic) {
+namespace {
+
+// The policy's parameters that require gradients: not the frozen skills of a task policy.
+std::vector<torch::Tensor> TrainablePolicyParameters(ModSkillPolicyImpl& policy) {
   std::vector<torch::Tensor> parameters;
   for (const torch::Tensor& p : policy.parameters()) {
     if (p.requires_grad()) parameters.push_back(p);
   }
+  return parameters;
+}
+
+}  // namespace
+
+std::vector<torch::Tensor> TrainableParameters(ModSkillPolicyImpl& policy, CriticImpl& critic) {
+  std::vector<torch::Tensor> parameters = TrainablePolicyParameters(policy);
   for (const torch::Tensor& p : critic.parameters()) parameters.push_back(p);
   return parameters;
 }
@@ -38,11 +48,7 @@ std::vector<torch::optim::OptimizerParamGroup> TrainableParameterGroups(ModSkill
     groups.push_back(group(TrainableParameters(policy, critic), learning_rate));
     return groups;
   }
-  std::vector<torch::Tensor> actor;
-  for (const torch::Tensor& p : policy.parameters()) {
-    if (p.requires_grad()) actor.push_back(p);
-  }
-  groups.push_back(group(std::move(actor), learning_rate));
+  groups.push_back(group(TrainablePolicyParameters(policy), learning_rate));
   groups.push_back(group(critic.parameters(), critic_learning_rate));
   return groups;
 }

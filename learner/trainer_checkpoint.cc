@@ -38,7 +38,6 @@ absl::StatusOr<std::string> Trainer::SerializeState() {
     discriminator_optimizer_->save(discriminator_optimizer);
     archive.write("optimizer", optimizer);
     archive.write("discriminator_optimizer", discriminator_optimizer);
-    archive.write("optimizer_groups", torch::tensor(static_cast<int64_t>(optimizer_->param_groups().size())));
     archive.write("critic_learning_rate", torch::tensor(config_.critic_learning_rate, torch::kFloat64));
     archive.write("iteration", torch::tensor(static_cast<int64_t>(iteration_)));
     archive.write("env_steps", torch::tensor(static_cast<int64_t>(env_steps_)));
@@ -197,11 +196,10 @@ absl::Status Trainer::RestoreState(torch::serialize::InputArchive& archive, cons
     load_module("discriminator", *discriminator_);
     load_module("obs_norm", *obs_norm_);
     load_module("amp_norm", *amp_norm_);
-    // Checkpoints from before --critic_learning_rate have one group and no critic rate of their own.
-    // A resume without the flag goes on at the checkpoint's rate; data-parallel ranks, which must
-    // agree on their optimizers, take it only from the flag.
-    torch::Tensor groups = torch::tensor(int64_t{1});
-    archive.try_read("optimizer_groups", groups);
+    // The critic rate decides the optimizer's groups (two when > 0); checkpoints from before
+    // --critic_learning_rate have none: one shared group. A resume without the flag goes on at the
+    // checkpoint's rate; data-parallel ranks, which must agree on their optimizers, take it only
+    // from the flag.
     torch::Tensor critic_rate = torch::tensor(0.0, torch::kFloat64);
     archive.try_read("critic_learning_rate", critic_rate);
     const double stored_rate = critic_rate.item<double>();
@@ -210,9 +208,9 @@ absl::Status Trainer::RestoreState(torch::serialize::InputArchive& archive, cons
       config_.critic_learning_rate = stored_rate;
       BuildPolicyOptimizer();
     }
-    if (groups.item<int64_t>() != static_cast<int64_t>(optimizer_->param_groups().size())) {
+    if ((stored_rate > 0) != (config_.critic_learning_rate > 0)) {
       return absl::FailedPreconditionError(absl::StrCat(
-          path, ": its optimizer has ", groups.item<int64_t>(), " parameter group(s), trained at --critic_learning_rate ",
+          path, ": its optimizer has ", stored_rate > 0 ? 2 : 1, " parameter group(s), trained at --critic_learning_rate ",
           stored_rate, " (0: the critic shared --learning_rate); resume it with that value"));
     }
     torch::serialize::InputArchive optimizer, discriminator_optimizer;
