@@ -58,8 +58,8 @@ train_side_by_side "--no_generative $SERVER_FLAGS" --skills "$SKILLS" --iteratio
 for i in "${!NAMES[@]}"; do
   name="${NAMES[$i]}"
   task=$(sed -n 's/.*--task[ =]\([a-z_]*\).*/\1/p' <<< "${FLAGS[$i]}")
-  # The goals it trained on (speeds, intervals, reach's box) are the goals it is evaluated on.
-  goal_flags=$(grep -oE -- '--task_(min_speed|max_speed|min_goal_interval_s|max_goal_interval_s|reach_box_size|reach_center)[ =][^ ]+' \
+  # The goals it trained on (speeds, intervals, reach's box, the steering) are the goals it is evaluated on.
+  goal_flags=$(grep -oE -- '--task_(min_speed|max_speed|min_goal_interval_s|max_goal_interval_s|reach_box_size|reach_center|steering_rate)[ =][^ ]+' \
       <<< "${FLAGS[$i]}" | tr '\n' ' ' || true)
   # A reach head trained with a teacher is evaluated beside the teacher itself, on its parts.
   teacher_flags=""

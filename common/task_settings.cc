@@ -41,6 +41,10 @@ absl::Status TaskSettings::Validate(const FieldNamer& name) const {
                                                      " m) outside [", low, ", 3] m"));
     }
   }
+  if (!std::isfinite(steering_rate) || steering_rate < 0 || steering_rate > kMaxSteeringRate) {
+    return absl::InvalidArgumentError(
+        absl::StrCat(name("steering_rate"), ": ", steering_rate, " outside [0, ", kMaxSteeringRate, "] deg/s"));
+  }
   return absl::OkStatus();
 }
 

@@ -37,7 +37,8 @@ absl::Status ValidateTaskSettings(const TrainerConfig& c) {
                                     {c.task_max_speed, &settings.max_speed},
                                     {c.task_min_goal_interval_s, &settings.min_goal_interval_s},
                                     {c.task_max_goal_interval_s, &settings.max_goal_interval_s},
-                                    {c.task_reach_box_size, &settings.reach_box_size}}) {
+                                    {c.task_reach_box_size, &settings.reach_box_size},
+                                    {c.task_steering_rate, &settings.steering_rate}}) {
     if (flag != 0) *field = flag;  // NaN too: Validate names it
   }
   for (size_t axis = 0; axis < c.task_reach_center.size(); ++axis) settings.reach_center[axis] = c.task_reach_center[axis];
@@ -254,6 +255,7 @@ void WriteTaskSettings(const TrainerConfig& config, v1::TaskSettings* settings) 
   settings->set_min_goal_interval_s(static_cast<float>(config.task_min_goal_interval_s));
   settings->set_max_goal_interval_s(static_cast<float>(config.task_max_goal_interval_s));
   if (config.task_reach_box_size > 0) settings->set_reach_box_size(static_cast<float>(config.task_reach_box_size));
+  if (config.task_steering_rate > 0) settings->set_steering_rate(static_cast<float>(config.task_steering_rate));
   if (config.task_reach_center.size() == 3) {
     settings->set_reach_center_x(static_cast<float>(config.task_reach_center[0]));
     settings->set_reach_center_y(static_cast<float>(config.task_reach_center[1]));
@@ -354,6 +356,7 @@ std::string TrainerConfig::ToJson() const {
                              {"max_goal_interval_s", task_max_goal_interval_s}};
     if (task_reach_box_size > 0) json["task_settings"]["reach_box_size"] = task_reach_box_size;
     if (!task_reach_center.empty()) json["task_settings"]["reach_center"] = task_reach_center;
+    if (task_steering_rate > 0) json["task_settings"]["steering_rate"] = task_steering_rate;
   }
   if (data_parallel.world_size > 1) {
     json["world_size"] = data_parallel.world_size;

@@ -95,6 +95,9 @@ struct TrainerConfig {
   // (empty: the server's (0, 0, 1)).
   double task_reach_box_size = 0;
   std::vector<double> task_reach_center;
+  // steer, reach, strike: the base motion turns toward the goal at up to this rate (deg/s; 0:
+  // straight on, the paper's), so that skills trained on turning clips read the turn from it.
+  double task_steering_rate = 0;
   // The parts whose z the task head displaces (e.g. R_Arm for reach); the others play the skill
   // prior's z exactly, without exploration noise, and leave PPO's ratios. Empty: every part (the
   // paper's high level). Needs the skill prior (a part without a head has no other z).
@@ -182,12 +185,12 @@ struct TrainerConfig {
 // clip sampler (ReportFailures): tracking and vr_tracking.
 bool TaskFollowsClips(const std::string& task);
 bool IsTrackingTask(const std::string& task);
-// INVALID_ARGUMENT naming --task and what `server` offers unless `described` (its Describe
-// answer) lists `task`.
 // On the walk the median of 30 exports tracked 0-7.7 mm closer at four seeds of four, never
 // further (README, Performance, "Learning").
 inline constexpr double kSmallTrackingCriticLearningRate = 1e-3;
 
+// INVALID_ARGUMENT naming --task and what `server` offers unless `described` (its Describe
+// answer) lists `task`.
 absl::Status CheckTaskOffered(const v1::EnvSpec& described, const std::string& task, const std::string& server);
 
 // The sessions' task settings from a validated config: each 0 or empty field left to the server.

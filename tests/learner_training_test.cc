@@ -551,6 +551,8 @@ TEST(LearnerTrainingTest, BadConfigurationsAreClearErrors) {
       {[](TrainerConfig* c) { c->task_min_speed = 4; }, "min_speed = 4"},  // above the server's default 3 m/s
       {[&](TrainerConfig* c) { c->task_max_goal_interval_s = nan; }, "--task_max_goal_interval_s"},
       {[](TrainerConfig* c) { c->task_min_goal_interval_s = 6; }, "--task_max_goal_interval_s"},
+      {[](TrainerConfig* c) { c->task_steering_rate = -30; }, "--task_steering_rate"},
+      {[&](TrainerConfig* c) { c->task_steering_rate = nan; }, "--task_steering_rate"},
       {[](TrainerConfig* c) {
          c->task = "reach", c->skills = "skills.pt", c->task_parts = {"R_Arm"}, c->model.task_skill_prior = false;
        },

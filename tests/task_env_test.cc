@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <tuple>
 
 #include <gtest/gtest.h>
 
@@ -159,6 +160,52 @@ TEST(BaseMotionAnchorTest, CarriesTheClipOntoTheCharactersRootAndHeading) {
   EXPECT_NEAR(target.body_rot[0].angularDistance(sim.body_rot[0]), 0.0, 1e-9);
   EXPECT_LT(((target.body_pos[23] - target.body_pos[0]) - turn * hand_offset).norm(), 1e-9);
   EXPECT_LT((target.body_vel[5] - turn * velocity).norm(), 1e-9);
+}
+
+// A steered base motion turns about the character's root toward the goal's bearing, by at most
+// the step's turn; a goal within the dead zone turns nothing.
+TEST(BaseMotionAnchorTest, SteeringTurnsTowardTheGoalByAtMostTheStepsTurn) {
+  HumanoidState sim = StandingState();
+  sim.body_pos[0] += Vec3(1.0, 2.0, 0.0);
+  sim.body_rot[0] = Quat(Eigen::AngleAxisd(0.7, Vec3::UnitZ())) * sim.body_rot[0];
+  const double heading = std::atan2((HeadingRotation(sim.body_rot[0]) * Vec3::UnitX()).y(),
+                                    (HeadingRotation(sim.body_rot[0]) * Vec3::UnitX()).x());
+  auto toward_bearing = [&](double bearing, double distance) -> Vec3 {
+    return distance * Vec3(std::cos(heading + bearing), std::sin(heading + bearing), 0.0) + Vec3(0, 0, 5.0);
+  };
+  for (const auto& [bearing, distance, max_turn, expected] :
+       {std::tuple{1.0, 2.0, 0.05, 0.05}, std::tuple{-2.5, 2.0, 0.05, -0.05}, std::tuple{-0.03, 2.0, 0.05, -0.03},
+        std::tuple{1.0, 0.1, 0.05, 0.0}}) {
+    HumanoidState target = sim;  // the anchored base motion: on the character's root
+    const Vec3 hand_offset = target.body_pos[23] - target.body_pos[0];
+    const double turn = SteerTowards(sim, toward_bearing(bearing, distance), max_turn, &target);
+    EXPECT_NEAR(turn, expected, 1e-12) << "bearing " << bearing;
+    const Quat yaw(Eigen::AngleAxisd(expected, Vec3::UnitZ()));
+    EXPECT_LT((target.body_pos[0] - sim.body_pos[0]).norm(), 1e-9) << "it turns about the root";
+    EXPECT_NEAR(target.body_rot[0].angularDistance(yaw * sim.body_rot[0]), 0.0, 1e-9);
+    EXPECT_LT(((target.body_pos[23] - target.body_pos[0]) - yaw * hand_offset).norm(), 1e-9);
+  }
+}
+
+// With a steering rate the steer env's observed base motion turns toward the goal; without one it
+// is tracking's (GoalTaskReferenceFeaturesAreTrackingsOnTheReference); the goal is the same.
+TEST(TaskSpecTest, SteeringRateTurnsTheObservedBaseMotion) {
+  EnvBatchConfig steered_config = TaskConfig(TaskKind::kSteer, 1);
+  steered_config.env.task_settings.steering_rate = 60;
+  auto straight = MakeBatch(TaskConfig(TaskKind::kSteer, 1));
+  auto steered = MakeBatch(steered_config);
+  ASSERT_TRUE(straight && steered);
+  const int walk = ClipIndex("deepmimic_walk");
+  for (EnvBatch* batch : {straight.get(), steered.get()}) batch->env(0).ResetTo(walk, 7, batch->row(0));
+  const EnvSpec& spec = steered->spec();
+  float most = 0;
+  for (int k = 0; k < spec.goal_obs.start; ++k) {
+    most = std::max(most, std::abs(steered->buffers().obs[k] - straight->buffers().obs[k]));
+  }
+  EXPECT_GT(most, 1e-3) << "the reference features turned";
+  for (int k = spec.goal_obs.start; k < spec.obs_size; ++k) {
+    ASSERT_EQ(steered->buffers().obs[k], straight->buffers().obs[k]) << "goal feature " << k;
+  }
 }
 
 TEST(SteerTaskTest, MovingAlongTheTargetAtItsSpeedWhileFacingItEarnsOne) {
@@ -498,7 +545,8 @@ TEST(TaskSettingsTest, OutOfRangeSettingsNameTheField) {
     TaskSettings settings;
     const char* field;
   };
-  TaskSettings speed, inverted, interval, long_interval, nan, no_box, huge_box, underground, far, nan_center;
+  TaskSettings speed, inverted, interval, long_interval, nan, no_box, huge_box, underground, far, nan_center,
+      backward_steering, fast_steering;
   speed.min_speed = -1;
   inverted.max_speed = 0.1;
   interval.min_goal_interval_s = 0;
@@ -509,11 +557,14 @@ TEST(TaskSettingsTest, OutOfRangeSettingsNameTheField) {
   underground.reach_center[2] = 0.5;  // the 2 m box would reach 0.5 m below the floor
   far.reach_center[0] = 2.5;
   nan_center.reach_center[1] = std::nan("");
+  backward_steering.steering_rate = -10;
+  fast_steering.steering_rate = 1000;
   for (const Case& c :
        {Case{speed, "min_speed"}, Case{inverted, "max_speed"}, Case{interval, "min_goal_interval_s"},
         Case{long_interval, "max_goal_interval_s"}, Case{nan, "max_speed"}, Case{no_box, "reach_box_size"},
         Case{huge_box, "reach_box_size"}, Case{underground, "reach_center_z"}, Case{far, "reach_center_x"},
-        Case{nan_center, "reach_center_y"}}) {
+        Case{nan_center, "reach_center_y"}, Case{backward_steering, "steering_rate"},
+        Case{fast_steering, "steering_rate"}}) {
     const absl::Status status = c.settings.Validate();
     EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument) << c.field;
     EXPECT_NE(status.message().find(c.field), std::string::npos) << status;

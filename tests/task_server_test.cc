@@ -117,6 +117,10 @@ TEST_F(SimulationServerTest, BadTasksAreRejectedNamingTheField) {
   config.mutable_task_settings()->set_reach_box_size(0.f);  // set, so not the default
   cases.push_back({config, "task_settings.reach_box_size"});
   config = Config(2);
+  config.set_task("strike");
+  config.mutable_task_settings()->set_steering_rate(1000.f);
+  cases.push_back({config, "task_settings.steering_rate"});
+  config = Config(2);
   config.set_task("reach");
   config.mutable_task_settings()->set_reach_center_z(0.f);  // half the default box underground
   cases.push_back({config, "task_settings.reach_center_z"});

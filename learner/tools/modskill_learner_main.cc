@@ -119,6 +119,9 @@ ABSL_FLAG(double, task_max_goal_interval_s, 0, "steer, reach: longest time betwe
 ABSL_FLAG(double, task_reach_box_size, 0, "reach: edge of the box targets are drawn in, m (0: the paper's 2)");
 ABSL_FLAG(std::vector<std::string>, task_reach_center, {},
           "reach: the box's centre in the heading frame, forward,left,height in m (default: the paper's 0,0,1)");
+ABSL_FLAG(double, task_steering_rate, 0,
+          "steer, reach, strike: the base motion turns toward the goal at up to this rate, deg/s (0: straight on, "
+          "the paper's); --eval --task takes it too");
 ABSL_FLAG(bool, task_baselines, false,
           "--eval --task: also drive the skills with a random unit z per part each step and with the task "
           "policy's mean z");
@@ -301,6 +304,7 @@ absl::Status TaskSettingsFromFlags(TrainerConfig* config) {
   config->task_min_goal_interval_s = absl::GetFlag(FLAGS_task_min_goal_interval_s);
   config->task_max_goal_interval_s = absl::GetFlag(FLAGS_task_max_goal_interval_s);
   config->task_reach_box_size = absl::GetFlag(FLAGS_task_reach_box_size);
+  config->task_steering_rate = absl::GetFlag(FLAGS_task_steering_rate);
   config->task_reach_center.clear();
   for (const std::string& text : absl::GetFlag(FLAGS_task_reach_center)) {
     double value = 0;

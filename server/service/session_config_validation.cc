@@ -64,6 +64,7 @@ absl::StatusOr<TaskSettings> ToTaskSettings(const v1::TaskSettings& wire) {
   if (wire.has_reach_center_x()) settings.reach_center[0] = wire.reach_center_x();
   if (wire.has_reach_center_y()) settings.reach_center[1] = wire.reach_center_y();
   if (wire.has_reach_center_z()) settings.reach_center[2] = wire.reach_center_z();
+  if (wire.has_steering_rate()) settings.steering_rate = wire.steering_rate();
   if (absl::Status status = settings.Validate(); !status.ok()) return status;
   return settings;
 }

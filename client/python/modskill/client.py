@@ -404,7 +404,8 @@ class Client:
             "strike", "vr_tracking"): the goal ends each observation (``spec.goal_obs``).
           task_settings: e.g. {"min_speed": 1.0, "max_speed": 2.0, "min_goal_interval_s": 2,
             "max_goal_interval_s": 5}, or reach's target box {"reach_box_size": 0.5,
-            "reach_center_x": 0.3, "reach_center_y": -0.3, "reach_center_z": 1.2}; a missing key
+            "reach_center_x": 0.3, "reach_center_y": -0.3, "reach_center_z": 1.2}, or
+            {"steering_rate": 60} (deg/s: the base motion turns toward the goal); a missing key
             keeps the server's default.
           loop_clips: tracking only: a clip's end does not end the episode; the reference goes on
             at frame 1, moved by the clip's own displacement, until max_episode_steps (0: 300).

@@ -1,5 +1,8 @@
 #include "server/core/env/base_motion_anchor.h"
 
+#include <algorithm>
+#include <cmath>
+
 #include "server/core/sim/rotation_math.h"
 
 namespace modskill {
@@ -34,6 +37,18 @@ PlanarMotion AnchorToCharacter(const HumanoidState& anchor, const HumanoidState&
       PlanarMotion::Between(anchor.body_pos[0], anchor.body_rot[0], sim.body_pos[0], sim.body_rot[0]);
   motion.Apply(target);
   return motion;
+}
+
+double SteerTowards(const HumanoidState& sim, const Vec3& toward, double max_turn, HumanoidState* target) {
+  const Vec3 local = InverseHeadingRotation(sim.body_rot[0]) * Vec3(toward.x(), toward.y(), 0.0);
+  if (local.norm() < kSteeringDeadZone) return 0.0;
+  const double turn = std::clamp(std::atan2(local.y(), local.x()), -max_turn, max_turn);
+  PlanarMotion motion;
+  motion.yaw = Quat(Eigen::AngleAxisd(turn, Vec3::UnitZ()));
+  const Vec3 pivot(sim.body_pos[0].x(), sim.body_pos[0].y(), 0.0);
+  motion.shift = pivot - motion.yaw * pivot;
+  motion.Apply(target);
+  return turn;
 }
 
 PlanarMotion ClipCycleMotion(const MotionClip& clip) {

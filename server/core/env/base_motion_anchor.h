@@ -30,6 +30,13 @@ struct PlanarMotion {
 // heading; heights and tilts are left as the clip has them), and returns that motion.
 PlanarMotion AnchorToCharacter(const HumanoidState& anchor, const HumanoidState& sim, HumanoidState* target);
 
+// A steered base motion (TaskSettings::steering_rate): turns `target` about `sim`'s root by the
+// bearing of `toward` (world, horizontal part) in `sim`'s heading frame, clamped to
+// [-max_turn, max_turn] rad, and returns the turn. A goal closer than kSteeringDeadZone
+// horizontally turns nothing: its bearing is noise.
+inline constexpr double kSteeringDeadZone = 0.2;  // m
+double SteerTowards(const HumanoidState& sim, const Vec3& toward, double max_turn, HumanoidState* target);
+
 // A looping clip's displacement per cycle: the planar motion from its first frame's root to its
 // last frame's (SessionConfig.loop_clips).
 PlanarMotion ClipCycleMotion(const MotionClip& clip);

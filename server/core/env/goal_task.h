@@ -44,6 +44,9 @@ class GoalTask {
   void NextGoal(const HumanoidState& sim, std::mt19937_64& rng);
   // goal_obs.size floats for the observation, in the heading frame of `sim`.
   virtual void WriteGoal(const HumanoidState& sim, const mjData* data, float* goal) const = 0;
+  // Which way the goal lies from the character (world; only x and y count): the way a steered
+  // base motion turns (TaskSettings::steering_rate).
+  virtual Vec3 GoalBearing(const HumanoidState& sim, const mjData* data) const = 0;
 
  protected:
   explicit GoalTask(const GoalTaskContext* context) : context_(context) {}

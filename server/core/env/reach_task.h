@@ -17,6 +17,8 @@ class ReachTask : public GoalTask {
   void Reward(const HumanoidState& sim, const mjData* data, float* terms) override;
   // c - p_root in the heading frame (m).
   void WriteGoal(const HumanoidState& sim, const mjData* data, float* goal) const override;
+  // From the root to the target point.
+  Vec3 GoalBearing(const HumanoidState& sim, const mjData* data) const override { return target_ - sim.body_pos[0]; }
 
   Vec3 target() const { return target_; }  // world (m), for tests
 

@@ -17,6 +17,8 @@ class SteerTask : public GoalTask {
   void Reward(const HumanoidState& sim, const mjData* data, float* terms) override;
   // [d_x, d_y] in the heading frame, v* (m/s).
   void WriteGoal(const HumanoidState& sim, const mjData* data, float* goal) const override;
+  // The target direction.
+  Vec3 GoalBearing(const HumanoidState& sim, const mjData* data) const override { return direction_; }
 
   // The goal, for tests: the target direction (world, unit, horizontal) and speed.
   Vec3 direction() const { return direction_; }

@@ -73,6 +73,10 @@ bool StrikeTask::Failed(const mjData* data) const {
   return false;
 }
 
+Vec3 StrikeTask::GoalBearing(const HumanoidState& sim, const mjData* data) const {
+  return Read3(data->qpos + context_->target_qpos) - sim.body_pos[0];
+}
+
 void StrikeTask::WriteGoal(const HumanoidState& sim, const mjData* data, float* goal) const {
   const double* q = data->qpos + context_->target_qpos;
   const double* v = data->qvel + context_->target_qvel;

@@ -35,6 +35,8 @@ class StrikeTask : public GoalTask {
   // The target's position relative to the root (3), rotation (6, tangent-normal), linear and
   // angular velocity (3 + 3), in the heading frame.
   void WriteGoal(const HumanoidState& sim, const mjData* data, float* goal) const override;
+  // From the root to the target.
+  Vec3 GoalBearing(const HumanoidState& sim, const mjData* data) const override;
 
  protected:
   void DrawGoal(const HumanoidState& sim, std::mt19937_64& rng) override;

@@ -295,6 +295,9 @@ void TrackingEnv::WriteObservation(EnvRow row) {
     ReadReferenceState(motion, next_frame, &target_);
     ReadReferenceState(motion, next_frame - 1, &reference_);
     AnchorToCharacter(reference_, sim_, &target_);
+    if (const double rate = context_->goal_task.settings.steering_rate; rate > 0) {
+      SteerTowards(sim_, goal_task_->GoalBearing(sim_, data_), rate * M_PI / 180 * spec.control_dt, &target_);
+    }
     WriteTrackingObservation(spec, sim_, target_, obs);
     goal_task_->WriteGoal(sim_, data_, obs + spec.goal_obs.start);
   } else {
