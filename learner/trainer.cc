@@ -122,6 +122,7 @@ ServerPoolOptions Trainer::PoolOptions() const {
   pool.session.set_amp_obs(v1::FULL);
   pool.session.set_loop_clips(config.loop_clips);
   pool.session.set_anchor_reference(config.anchor_reference);
+  pool.session.set_anchor_position_only(config.anchor_position_only);
   for (const std::string& part : config.reward_parts) pool.session.add_reward_parts(part);
   pool.session.set_reward_relative_to_root(config.reward_relative_to_root);
   if (config.energy_weight != 1.0) pool.session.set_energy_weight(static_cast<float>(config.energy_weight));

@@ -77,6 +77,9 @@ absl::Status ValidateTask(const TrainerConfig& c) {
       {"--reward_relative_to_root", c.reward_relative_to_root},
       {"--loop_clips", c.loop_clips},
       {"--anchor_reference", c.anchor_reference}};
+  if (c.anchor_position_only && !c.anchor_reference) {
+    return absl::InvalidArgumentError("--anchor_position_only: only with --anchor_reference");
+  }
   for (const auto& [flag, given] : tracking_only) {
     if (given && !IsTrackingTask(c.task)) {
       return absl::InvalidArgumentError(absl::StrCat(flag, ": tracking only, not with --task ", c.task));
@@ -330,6 +333,7 @@ std::string TrainerConfig::ToJson() const {
   json["task"] = task;
   json["loop_clips"] = loop_clips;
   json["anchor_reference"] = anchor_reference;
+  if (anchor_position_only) json["anchor_position_only"] = true;
   if (!init_from.empty()) {
     json["init_from"] = init_from;
     json["train_parts"] = train_parts;

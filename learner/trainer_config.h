@@ -89,6 +89,10 @@ struct TrainerConfig {
   // as a task's base motion will be: the skills learn to go on from where they are, not to win
   // back drift.
   bool anchor_reference = false;
+  // With anchor_reference: the root's position only; the reference keeps the clip's heading, so a
+  // heading error stays until won back (SessionConfig.anchor_position_only): skills that follow a
+  // base motion a goal task steers (--task_steering_rate).
+  bool anchor_position_only = false;
   // SessionConfig.task_settings; 0 in a field: the server's default.
   double task_min_speed = 0, task_max_speed = 0, task_min_goal_interval_s = 0, task_max_goal_interval_s = 0;
   // reach's target box: its edge (m; 0: the server's 2 m) and its centre, forward, left, height

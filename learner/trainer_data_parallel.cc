@@ -51,6 +51,7 @@ std::vector<SharedSetting> SharedSettings(const TrainerConfig& c) {
       {"termination_curriculum", absl::StrCat(Text(c.curriculum_start), ":", Text(c.curriculum_end))},
       {"loop_clips", Text(c.loop_clips)},
       {"anchor_reference", Text(c.anchor_reference)},
+      {"anchor_position_only", Text(c.anchor_position_only)},
       {"reward_parts", absl::StrJoin(c.reward_parts, ",")},
       {"reward_relative_to_root", Text(c.reward_relative_to_root)},
       {"frozen_parts_act_on_mean", Text(c.frozen_parts_act_on_mean)},

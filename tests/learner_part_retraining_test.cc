@@ -275,6 +275,12 @@ TEST(PartRetrainingTest, BadSettingsAreNamed) {
   steer.anchor_reference = true;  // a task anchors its base motion itself
   EXPECT_THAT(std::string(Trainer::Create(steer).status().message()),
               HasSubstr("--anchor_reference: tracking only, not with --task steer"));
+  steer.task = "tracking";
+  steer.skills.clear();
+  steer.anchor_reference = false;
+  steer.anchor_position_only = true;
+  EXPECT_THAT(std::string(Trainer::Create(steer).status().message()),
+              HasSubstr("--anchor_position_only: only with --anchor_reference"));
 
   // An unknown reward part is the server's refusal, named, at once (not after --server_timeout_s).
   TrainerConfig tail = RetrainArms(*server, "bad");

@@ -162,33 +162,41 @@ TEST(BaseMotionAnchorTest, CarriesTheClipOntoTheCharactersRootAndHeading) {
   EXPECT_LT((target.body_vel[5] - turn * velocity).norm(), 1e-9);
 }
 
-// A steered base motion turns about the character's root toward the goal's bearing, by at most
-// the step's turn; a goal within the dead zone turns nothing.
-TEST(BaseMotionAnchorTest, SteeringTurnsTowardTheGoalByAtMostTheStepsTurn) {
+// A steered base motion turns toward the goal's bearing by at most the step's turn, never leads
+// the character by more than kMaxSteeringLead, and ignores a goal within the dead zone; anchored
+// at its heading it stands on the character's root facing that heading.
+TEST(BaseMotionAnchorTest, SteeredHeadingTurnsTowardTheGoalWithinItsLead) {
   HumanoidState sim = StandingState();
   sim.body_pos[0] += Vec3(1.0, 2.0, 0.0);
   sim.body_rot[0] = Quat(Eigen::AngleAxisd(0.7, Vec3::UnitZ())) * sim.body_rot[0];
-  const double heading = std::atan2((HeadingRotation(sim.body_rot[0]) * Vec3::UnitX()).y(),
-                                    (HeadingRotation(sim.body_rot[0]) * Vec3::UnitX()).x());
+  const double character = HeadingAngle(sim.body_rot[0]);
   auto toward_bearing = [&](double bearing, double distance) -> Vec3 {
-    return distance * Vec3(std::cos(heading + bearing), std::sin(heading + bearing), 0.0) + Vec3(0, 0, 5.0);
+    return distance * Vec3(std::cos(character + bearing), std::sin(character + bearing), 0.0) + Vec3(0, 0, 5.0);
   };
-  for (const auto& [bearing, distance, max_turn, expected] :
-       {std::tuple{1.0, 2.0, 0.05, 0.05}, std::tuple{-2.5, 2.0, 0.05, -0.05}, std::tuple{-0.03, 2.0, 0.05, -0.03},
-        std::tuple{1.0, 0.1, 0.05, 0.0}}) {
-    HumanoidState target = sim;  // the anchored base motion: on the character's root
-    const Vec3 hand_offset = target.body_pos[23] - target.body_pos[0];
-    const double turn = SteerTowards(sim, toward_bearing(bearing, distance), max_turn, &target);
-    EXPECT_NEAR(turn, expected, 1e-12) << "bearing " << bearing;
-    const Quat yaw(Eigen::AngleAxisd(expected, Vec3::UnitZ()));
-    EXPECT_LT((target.body_pos[0] - sim.body_pos[0]).norm(), 1e-9) << "it turns about the root";
-    EXPECT_NEAR(target.body_rot[0].angularDistance(yaw * sim.body_rot[0]), 0.0, 1e-9);
-    EXPECT_LT(((target.body_pos[23] - target.body_pos[0]) - yaw * hand_offset).norm(), 1e-9);
+  for (const auto& [bearing, distance, expected] :
+       {std::tuple{1.0, 2.0, 0.05}, std::tuple{-2.5, 2.0, -0.05}, std::tuple{-0.03, 2.0, -0.03},
+        std::tuple{1.0, 0.1, 0.0}}) {
+    const double heading = SteerHeading(character, sim, toward_bearing(bearing, distance), 0.05);
+    EXPECT_NEAR(std::remainder(heading - character, 2 * M_PI), expected, 1e-12) << "bearing " << bearing;
   }
+  double heading = character;
+  for (int step = 0; step < 40; ++step) heading = SteerHeading(heading, sim, toward_bearing(2.0, 2.0), 0.05);
+  EXPECT_NEAR(std::remainder(heading - character, 2 * M_PI), kMaxSteeringLead, 1e-12) << "the lead is bounded";
+
+  HumanoidState target = StandingState();
+  const HumanoidState anchor = StandingState();
+  const double anchor_heading = HeadingAngle(anchor.body_rot[0]);
+  const Vec3 hand_offset = target.body_pos[23] - target.body_pos[0];
+  AnchorToHeading(anchor, sim, character + 0.3, &target);
+  EXPECT_NEAR(target.body_pos[0].x(), sim.body_pos[0].x(), 1e-9);
+  EXPECT_NEAR(target.body_pos[0].y(), sim.body_pos[0].y(), 1e-9);
+  EXPECT_NEAR(std::remainder(HeadingAngle(target.body_rot[0]) - (character + 0.3), 2 * M_PI), 0.0, 1e-9);
+  const Quat turn(Eigen::AngleAxisd(character + 0.3 - anchor_heading, Vec3::UnitZ()));
+  EXPECT_LT(((target.body_pos[23] - target.body_pos[0]) - turn * hand_offset).norm(), 1e-9);
 }
 
-// With a steering rate the steer env's observed base motion turns toward the goal; without one it
-// is tracking's (GoalTaskReferenceFeaturesAreTrackingsOnTheReference); the goal is the same.
+// With a steering rate the steer env's observed base motion starts at the character's heading and
+// turns after the first step; the simulation and the goal are the same as without.
 TEST(TaskSpecTest, SteeringRateTurnsTheObservedBaseMotion) {
   EnvBatchConfig steered_config = TaskConfig(TaskKind::kSteer, 1);
   steered_config.env.task_settings.steering_rate = 60;
@@ -198,6 +206,11 @@ TEST(TaskSpecTest, SteeringRateTurnsTheObservedBaseMotion) {
   const int walk = ClipIndex("deepmimic_walk");
   for (EnvBatch* batch : {straight.get(), steered.get()}) batch->env(0).ResetTo(walk, 7, batch->row(0));
   const EnvSpec& spec = steered->spec();
+  for (int k = 0; k < spec.obs_size; ++k) {
+    ASSERT_NEAR(steered->buffers().obs[k], straight->buffers().obs[k], 1e-5) << "no turn before the first step, feature " << k;
+  }
+  const std::vector<float> zeros(69, 0.f);
+  for (EnvBatch* batch : {straight.get(), steered.get()}) ASSERT_TRUE(batch->Step(zeros).ok());
   float most = 0;
   for (int k = 0; k < spec.goal_obs.start; ++k) {
     most = std::max(most, std::abs(steered->buffers().obs[k] - straight->buffers().obs[k]));

@@ -133,6 +133,9 @@ TEST_F(SimulationServerTest, BadTasksAreRejectedNamingTheField) {
   config.set_anchor_reference(true);
   cases.push_back({config, "anchor_reference: tracking only"});
   config = Config(2);
+  config.set_anchor_position_only(true);
+  cases.push_back({config, "anchor_position_only: set, but anchor_reference is not"});
+  config = Config(2);
   config.set_anchor_reference(true);
   v1::FamilyParameterRange* gravity = config.mutable_family()->add_params();
   gravity->set_name("gravity");

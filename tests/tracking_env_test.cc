@@ -247,6 +247,45 @@ TEST(TrackingEnvTest, AnchoredReferenceGoesOnFromWhereTheCharacterIs) {
   EXPECT_LT(anchored.last_mean_error, global.last_mean_error - 0.1);
 }
 
+// SessionConfig.anchor_position_only: the reference stands on the character's root but keeps the
+// clip's own heading (a loop's cycles turning it on), so a heading error stays in the observation.
+TEST(TrackingEnvTest, ReferenceAnchoredInPositionOnlyKeepsTheClipsHeading) {
+  EnvBatchConfig config = SmallConfig(1);
+  config.env.termination = TerminationMode::kNone;
+  config.env.loop_clips = true;
+  config.env.anchor_reference = true;
+  config.env.anchor_position_only = true;
+  auto batch = MakeBatch(config);
+  const int walk = batch->motions().Find("deepmimic_walk");
+  const MotionClip& clip = batch->motions().clip(walk);
+  const int last = clip.num_frames - 1;
+  const double cycle_yaw = HeadingAngle(ClipCycleMotion(clip).yaw);
+  batch->env(0).ResetTo(walk, 0, batch->row(0));
+  const int root_task = batch->spec().body_obs_start[0] + kSelfFeaturesRoot;
+  int cycles = 0;
+  double largest_error = 0;
+  for (int s = 0; s < 2 * last; ++s) {
+    const int frame_before = batch->env(0).frame();
+    ASSERT_TRUE(batch->Step(ReferenceActions(*batch)).ok());
+    ASSERT_EQ(batch->buffers().done[0], 0) << s;
+    const int frame = batch->env(0).frame();
+    if (frame < frame_before) ++cycles;
+    const int next = frame >= last ? 1 : frame + 1;
+    const double clip_heading = HeadingAngle(clip.local(next, 0)) + (cycles + (next < frame ? 1 : 0)) * cycle_yaw;
+    const double* q = batch->env(0).data()->qpos;
+    const double character = HeadingAngle(Quat(q[3], q[4], q[5], q[6]));
+    const float* task = &batch->buffers().obs[root_task];
+    const float* dpos = task;           // the reference root's offset, heading frame
+    const float* reference_x = task + 18;  // its x axis, heading frame (tangent-normal, first half)
+    EXPECT_LT(std::hypot(dpos[0], dpos[1]), 0.1) << "step " << s << ": the reference stands on the character";
+    const double observed = character + std::atan2(reference_x[1], reference_x[0]);
+    EXPECT_NEAR(WrapAngle(observed - clip_heading), 0.0, 1e-4) << "step " << s;
+    largest_error = std::max(largest_error, std::abs(WrapAngle(character - clip_heading)));
+  }
+  EXPECT_EQ(cycles, 1) << "the loop wrapped";
+  EXPECT_GT(largest_error, 0.05) << "the open-loop character turned off the clip's heading, and it shows";
+}
+
 TEST(BaseMotionAnchorTest, PlanarMotionsComposeAndACycleMovesTheFirstFrameOntoTheLast) {
   const MotionClip& walk = DefaultMotions()->clip(DefaultMotions()->Find("deepmimic_walk"));
   const PlanarMotion cycle = ClipCycleMotion(walk);

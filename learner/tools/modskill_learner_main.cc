@@ -91,6 +91,10 @@ ABSL_FLAG(bool, loop_clips, false,
 ABSL_FLAG(bool, anchor_reference, false,
           "tracking: each step the reference is carried onto the character's root and heading, as a task's base "
           "motion is, so the skills learn to go on from where they are instead of winning back drift");
+ABSL_FLAG(bool, anchor_position_only, false,
+          "with --anchor_reference: carry the reference onto the character's root position only; it keeps the "
+          "clip's heading, so the skills learn to win back a heading error and follow a steered base motion "
+          "(--task_steering_rate)");
 ABSL_FLAG(double, task_log_std, -2.9, "--task: fixed log standard deviation of the task policy in z space");
 ABSL_FLAG(bool, task_skill_prior, true,
           "--task steer|reach|strike: z = normalize(z_prior + task head), z_prior from the tracker's frozen attention on "
@@ -390,6 +394,7 @@ absl::Status TaskFromFlags(TrainerConfig* config) {
   config->task_teacher_steps = absl::GetFlag(FLAGS_task_teacher_steps);
   config->loop_clips = absl::GetFlag(FLAGS_loop_clips);
   config->anchor_reference = absl::GetFlag(FLAGS_anchor_reference);
+  config->anchor_position_only = absl::GetFlag(FLAGS_anchor_position_only);
   config->init_from = absl::GetFlag(FLAGS_init_from);
   config->train_parts = absl::GetFlag(FLAGS_train_parts);
   config->reward_parts = absl::GetFlag(FLAGS_reward_parts);

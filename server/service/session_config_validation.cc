@@ -92,6 +92,9 @@ absl::Status CheckTrackingOnlyFields(const v1::SessionConfig& config, TaskKind t
     return absl::InvalidArgumentError(absl::StrCat("anchor_reference: tracking only; task ", TaskInfoOf(task).name,
                                                    " does not track a reference"));
   }
+  if (config.anchor_position_only() && !config.anchor_reference()) {
+    return absl::InvalidArgumentError("anchor_position_only: set, but anchor_reference is not");
+  }
   if (config.anchor_reference() && config.family().params_size() > 0) {
     return absl::InvalidArgumentError("anchor_reference: not for a family session (its clip is tracked where it is)");
   }
@@ -211,6 +214,7 @@ absl::StatusOr<SessionSettings> ParseSessionConfig(const v1::SessionConfig& conf
   settings.env.task_settings = *task_settings;
   settings.env.loop_clips = config.loop_clips();
   settings.env.anchor_reference = config.anchor_reference();
+  settings.env.anchor_position_only = config.anchor_position_only();
   settings.env.family = *std::move(family_ranges);
   settings.env.reward.bodies = *std::move(reward_bodies);
   settings.env.reward.relative_to_root = config.reward_relative_to_root();

@@ -380,7 +380,7 @@ class Client:
                 task_settings: Optional[Mapping[str, float]] = None, loop_clips: bool = False,
                 family: Optional[Mapping[str, Union[float, Tuple[float, float]]]] = None,
                 reward_parts: Sequence[str] = (), reward_relative_to_root: bool = False,
-                anchor_reference: bool = False, energy_weight: Optional[float] = None,
+                anchor_reference: bool = False, anchor_position_only: bool = False, energy_weight: Optional[float] = None,
                 imitation_kernels: Optional[Mapping[str, float]] = None) -> "Session":
         """Opens a simulation session of ``num_envs`` envs and returns it once the server has
         reset them (``Session.initial`` holds the first observations).
@@ -422,6 +422,8 @@ class Client:
           anchor_reference: tracking only: each step the reference's next frame is carried onto
             the character's root and heading (as a goal task's base motion is), so the reward and
             termination ask the character to go on from where it is, not to win back drift.
+          anchor_position_only: with anchor_reference: the root's position only; the reference
+            keeps the clip's heading, so a heading error stays until the character wins it back.
           energy_weight: the energy penalty as a multiple of the paper's, in [0, 100]; None: 1.
             0 turns it off (its ``reward_terms`` column stays, at 0).
           imitation_kernels: tracking only: the imitation reward's k per term, e.g. {"pos": 400};
@@ -446,7 +448,8 @@ class Client:
                                   loop_clips=bool(loop_clips), family=_family_config(family),
                                   reward_parts=[reward_parts] if isinstance(reward_parts, str) else list(reward_parts),
                                   reward_relative_to_root=bool(reward_relative_to_root),
-                                  anchor_reference=bool(anchor_reference))
+                                  anchor_reference=bool(anchor_reference),
+                                  anchor_position_only=bool(anchor_position_only))
         if energy_weight is not None:
             config.energy_weight = float(energy_weight)
         if imitation_kernels:

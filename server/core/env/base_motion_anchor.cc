@@ -39,16 +39,26 @@ PlanarMotion AnchorToCharacter(const HumanoidState& anchor, const HumanoidState&
   return motion;
 }
 
-double SteerTowards(const HumanoidState& sim, const Vec3& toward, double max_turn, HumanoidState* target) {
-  const Vec3 local = InverseHeadingRotation(sim.body_rot[0]) * Vec3(toward.x(), toward.y(), 0.0);
-  if (local.norm() < kSteeringDeadZone) return 0.0;
-  const double turn = std::clamp(std::atan2(local.y(), local.x()), -max_turn, max_turn);
-  PlanarMotion motion;
-  motion.yaw = Quat(Eigen::AngleAxisd(turn, Vec3::UnitZ()));
-  const Vec3 pivot(sim.body_pos[0].x(), sim.body_pos[0].y(), 0.0);
-  motion.shift = pivot - motion.yaw * pivot;
+double HeadingAngle(const Quat& q) {
+  const Vec3 forward = q * Vec3::UnitX();
+  return std::atan2(forward.y(), forward.x());
+}
+
+double SteerHeading(double heading, const HumanoidState& sim, const Vec3& toward, double max_turn) {
+  if (std::hypot(toward.x(), toward.y()) >= kSteeringDeadZone) {
+    const double bearing = WrapAngle(std::atan2(toward.y(), toward.x()) - heading);
+    heading += std::clamp(bearing, -max_turn, max_turn);
+  }
+  const double character = HeadingAngle(sim.body_rot[0]);
+  return WrapAngle(character + std::clamp(WrapAngle(heading - character), -kMaxSteeringLead, kMaxSteeringLead));
+}
+
+PlanarMotion AnchorToHeading(const HumanoidState& anchor, const HumanoidState& sim, double heading,
+                             HumanoidState* target) {
+  const PlanarMotion motion = PlanarMotion::Between(anchor.body_pos[0], anchor.body_rot[0], sim.body_pos[0],
+                                                    Quat(Eigen::AngleAxisd(heading, Vec3::UnitZ())));
   motion.Apply(target);
-  return turn;
+  return motion;
 }
 
 PlanarMotion ClipCycleMotion(const MotionClip& clip) {

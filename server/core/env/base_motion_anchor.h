@@ -9,6 +9,8 @@
 #ifndef MODSKILL_SERVER_CORE_ENV_BASE_MOTION_ANCHOR_H_
 #define MODSKILL_SERVER_CORE_ENV_BASE_MOTION_ANCHOR_H_
 
+#include <cmath>
+
 #include "server/core/env/humanoid_state.h"
 
 namespace modskill {
@@ -30,12 +32,19 @@ struct PlanarMotion {
 // heading; heights and tilts are left as the clip has them), and returns that motion.
 PlanarMotion AnchorToCharacter(const HumanoidState& anchor, const HumanoidState& sim, HumanoidState* target);
 
-// A steered base motion (TaskSettings::steering_rate): turns `target` about `sim`'s root by the
-// bearing of `toward` (world, horizontal part) in `sim`'s heading frame, clamped to
-// [-max_turn, max_turn] rad, and returns the turn. A goal closer than kSteeringDeadZone
-// horizontally turns nothing: its bearing is noise.
-inline constexpr double kSteeringDeadZone = 0.2;  // m
-double SteerTowards(const HumanoidState& sim, const Vec3& toward, double max_turn, HumanoidState* target);
+// A steered base motion (TaskSettings::steering_rate) keeps a heading of its own: each step it
+// turns toward the goal's bearing (`toward`, world, horizontal part) by at most max_turn rad, and
+// stays within kMaxSteeringLead of the character's heading, so that the character sees a heading
+// error it must win back (a tracker corrects those) and the base motion never runs away from it.
+// A goal closer than kSteeringDeadZone horizontally turns nothing: its bearing is noise.
+inline constexpr double kSteeringDeadZone = 0.2;      // m
+inline constexpr double kMaxSteeringLead = M_PI / 6;  // rad: within what a tracker wins back before 0.25 m
+double SteerHeading(double heading, const HumanoidState& sim, const Vec3& toward, double max_turn);
+// The yaw (rad, about +z, from +x) of q's heading.
+double HeadingAngle(const Quat& q);
+// As AnchorToCharacter, but the anchor's root takes `heading` instead of the character's.
+PlanarMotion AnchorToHeading(const HumanoidState& anchor, const HumanoidState& sim, double heading,
+                             HumanoidState* target);
 
 // A looping clip's displacement per cycle: the planar motion from its first frame's root to its
 // last frame's (SessionConfig.loop_clips).

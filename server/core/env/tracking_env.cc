@@ -51,6 +51,7 @@ void TrackingEnv::ResetTo(int clip, int frame, EnvRow row) {
   frame_ = std::clamp(frame, 0, motion_->num_frames - 2);
   episode_steps_ = 0;
   loop_motion_ = PlanarMotion();
+  reference_yaw_ = 0;
   if (LoopsClip()) cycle_motion_ = ClipCycleMotion(*motion_);
   finished_ = false;
   if (family_ != nullptr) {
@@ -68,6 +69,7 @@ void TrackingEnv::ResetTo(int clip, int frame, EnvRow row) {
   if (goal_task_ != nullptr) {
     ReadSimulatedState(*kinematics_, data_, &sim_);
     goal_task_->Reset(sim_, data_, rng_);
+    base_heading_ = HeadingAngle(sim_.body_rot[0]);
   }
   // AMP history starts as the reference's own recent past.
   context_->reference_amp->WriteHistory(clip, frame_, amp_history_.data());
@@ -130,6 +132,7 @@ void TrackingEnv::Step(const float* action, EnvRow row) {
   ++episode_steps_;
   // An anchored reference keeps the motion WriteObservation found: it carried next_frame.
   if (LoopsClip() && !AnchorsReference()) loop_motion_ = LoopMotionOf(next_frame);
+  if (LoopsClip() && next_frame < frame_) reference_yaw_ += HeadingAngle(cycle_motion_.yaw);
   // A tracking episode ends on reaching the last frame, so a step never starts there.
   frame_ = next_frame;
   if (PhysicsDiverged()) {
@@ -140,6 +143,10 @@ void TrackingEnv::Step(const float* action, EnvRow row) {
   float* terms = &out.reward_terms[static_cast<size_t>(row.index) * out.widths.reward_terms];
   if (goal_task_ != nullptr) {
     ScoreGoalTask(terms, row);
+    if (SteersBaseMotion()) {
+      const double max_turn = context_->goal_task.settings.steering_rate * M_PI / 180 * context_->spec->control_dt;
+      base_heading_ = SteerHeading(base_heading_, sim_, goal_task_->GoalBearing(sim_, data_), max_turn);
+    }
     AddEnergyAndSum(power, terms, row);
     const EpisodeEnd failure = goal_task_->Failed(data_) ? EpisodeEnd::kTask
                                : episode_steps_ > 1 && context_->fall_detector->Fallen(data_, sim_) ? EpisodeEnd::kFall
@@ -294,9 +301,10 @@ void TrackingEnv::WriteObservation(EnvRow row) {
     const int next_frame = NextFrame();
     ReadReferenceState(motion, next_frame, &target_);
     ReadReferenceState(motion, next_frame - 1, &reference_);
-    AnchorToCharacter(reference_, sim_, &target_);
-    if (const double rate = context_->goal_task.settings.steering_rate; rate > 0) {
-      SteerTowards(sim_, goal_task_->GoalBearing(sim_, data_), rate * M_PI / 180 * spec.control_dt, &target_);
+    if (SteersBaseMotion()) {
+      AnchorToHeading(reference_, sim_, base_heading_, &target_);
+    } else {
+      AnchorToCharacter(reference_, sim_, &target_);
     }
     WriteTrackingObservation(spec, sim_, target_, obs);
     goal_task_->WriteGoal(sim_, data_, obs + spec.goal_obs.start);
@@ -307,7 +315,14 @@ void TrackingEnv::WriteObservation(EnvRow row) {
       // As a goal task's base motion: the frame before the next one put on the character, the
       // next frame moved with it; Step scores against the same motion.
       ReadReferenceState(motion, next_frame - 1, &reference_);
-      loop_motion_ = AnchorToCharacter(reference_, sim_, &target_);
+      if (context_->config.anchor_position_only) {
+        // The clip's heading as global tracking would have it; a wrap starts the next cycle.
+        const double cycle = LoopsClip() && next_frame < frame_ ? HeadingAngle(cycle_motion_.yaw) : 0.0;
+        const double heading = HeadingAngle(reference_.body_rot[0]) + reference_yaw_ + cycle;
+        loop_motion_ = AnchorToHeading(reference_, sim_, heading, &target_);
+      } else {
+        loop_motion_ = AnchorToCharacter(reference_, sim_, &target_);
+      }
     } else if (LoopsClip()) {
       LoopMotionOf(next_frame).Apply(&target_);
     }

@@ -57,6 +57,9 @@ struct TrackingEnvConfig {
   // Tracking: the reference is carried onto the character's root and heading each step, as a goal
   // task's base motion is (SessionConfig.anchor_reference).
   bool anchor_reference = false;
+  // With anchor_reference: the root's position only; the reference keeps the clip's own heading
+  // (SessionConfig.anchor_position_only).
+  bool anchor_position_only = false;
   // A motor-skill family (family_episode.h): the session's parameter ranges; empty otherwise.
   std::vector<ParamRange> family;
   // false: an ended episode keeps its final state and later steps do nothing until the next
@@ -149,6 +152,8 @@ class TrackingEnv {
   bool AnchorsReference() const {
     return context_->config.anchor_reference && goal_task_ == nullptr && family_ == nullptr;
   }
+  // A goal task whose base motion turns toward the goal (TaskSettings::steering_rate).
+  bool SteersBaseMotion() const { return goal_task_ != nullptr && context_->goal_task.settings.steering_rate > 0; }
   // Whether loop_motion_ carries the reference: a loop's cycles, or the anchor onto the character.
   bool MovesReference() const { return LoopsClip() || AnchorsReference(); }
   // Where the reference of `frame`, the next frame or the current one, lies in this loop (the
@@ -181,6 +186,11 @@ class TrackingEnv {
   // cycle. An anchored reference: the motion that put this step's frame on the character.
   PlanarMotion loop_motion_, cycle_motion_;
   int frame_ = 0;
+  // A steered base motion's heading (rad, world yaw; SteerHeading).
+  double base_heading_ = 0;
+  // A reference anchored in position only: the yaw (rad) its heading has turned from the clip's
+  // own, a looping clip's cycle yaw once per cycle.
+  double reference_yaw_ = 0;
   int episode_steps_ = 0;
   bool finished_ = false;
   int64_t physics_resets_ = 0;
