@@ -379,6 +379,13 @@ TEST(StrikeTaskTest, TargetStandsInFrontAndOnlyTheRightArmMayTouchIt) {
     strike.WriteGoal(sim, data, goal);
     EXPECT_NEAR(Vec3(goal[0], goal[1], 0).norm(), offset.norm(), 1e-4);
     for (int k = 9; k < 15; ++k) EXPECT_EQ(goal[k], 0.f) << "at rest";
+    // A steered base motion aims beside the target, at its left as seen from the root, so the
+    // right hand meets it.
+    const Vec3 aim = strike.GoalBearing(sim, data);
+    const Vec3 beside = Vec3(aim.x(), aim.y(), 0) - offset;
+    EXPECT_NEAR(beside.norm(), StrikeTask::kHandOffset, 1e-9);
+    EXPECT_NEAR(beside.dot(offset), 0.0, 1e-9);
+    EXPECT_GT(offset.cross(beside).z(), 0.0) << "to the left";
     float terms[2];
     strike.Reward(sim, data, terms);
     EXPECT_NEAR(terms[0], 0.f, 1e-6) << "standing";

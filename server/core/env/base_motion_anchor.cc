@@ -39,11 +39,6 @@ PlanarMotion AnchorToCharacter(const HumanoidState& anchor, const HumanoidState&
   return motion;
 }
 
-double HeadingAngle(const Quat& q) {
-  const Vec3 forward = q * Vec3::UnitX();
-  return std::atan2(forward.y(), forward.x());
-}
-
 double SteerHeading(double heading, const HumanoidState& sim, const Vec3& toward, double max_turn) {
   if (std::hypot(toward.x(), toward.y()) >= kSteeringDeadZone) {
     const double bearing = WrapAngle(std::atan2(toward.y(), toward.x()) - heading);

@@ -40,8 +40,6 @@ PlanarMotion AnchorToCharacter(const HumanoidState& anchor, const HumanoidState&
 inline constexpr double kSteeringDeadZone = 0.2;      // m
 inline constexpr double kMaxSteeringLead = M_PI / 6;  // rad: within what a tracker wins back before 0.25 m
 double SteerHeading(double heading, const HumanoidState& sim, const Vec3& toward, double max_turn);
-// The yaw (rad, about +z, from +x) of q's heading.
-double HeadingAngle(const Quat& q);
 // As AnchorToCharacter, but the anchor's root takes `heading` instead of the character's.
 PlanarMotion AnchorToHeading(const HumanoidState& anchor, const HumanoidState& sim, double heading,
                              HumanoidState* target);

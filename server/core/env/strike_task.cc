@@ -74,7 +74,16 @@ bool StrikeTask::Failed(const mjData* data) const {
 }
 
 Vec3 StrikeTask::GoalBearing(const HumanoidState& sim, const mjData* data) const {
-  return Read3(data->qpos + context_->target_qpos) - sim.body_pos[0];
+  Vec3 to_target = Read3(data->qpos + context_->target_qpos) - sim.body_pos[0];
+  to_target.z() = 0;
+  const double distance = to_target.norm();
+  if (distance < 1e-9) return to_target;
+  const Vec3 left = Vec3(-to_target.y(), to_target.x(), 0.0) / distance;
+  const double* q = data->qpos + context_->target_qpos;
+  const double up = (Quat(q[3], q[4], q[5], q[6]).normalized() * Vec3::UnitZ()).z();
+  // Down: turn left, away from where it lies, rather than walk over it.
+  if (up < 0.5) return left;
+  return to_target + kHandOffset * left;
 }
 
 void StrikeTask::WriteGoal(const HumanoidState& sim, const mjData* data, float* goal) const {

@@ -15,12 +15,14 @@ using Vec3 = Eigen::Vector3d;
 using Quat = Eigen::Quaterniond;
 using Mat3 = Eigen::Matrix3d;
 
-// Yaw-only rotation that carries +x onto the horizontal projection of q's forward axis.
-inline Quat HeadingRotation(const Quat& q) {
+// The yaw (rad, about +z, from +x) of the horizontal projection of q's forward axis.
+inline double HeadingAngle(const Quat& q) {
   const Vec3 forward = q * Vec3::UnitX();
-  const double yaw = std::atan2(forward.y(), forward.x());
-  return Quat(Eigen::AngleAxisd(yaw, Vec3::UnitZ()));
+  return std::atan2(forward.y(), forward.x());
 }
+
+// Yaw-only rotation that carries +x onto the horizontal projection of q's forward axis.
+inline Quat HeadingRotation(const Quat& q) { return Quat(Eigen::AngleAxisd(HeadingAngle(q), Vec3::UnitZ())); }
 
 // Inverse of HeadingRotation: rotates world vectors into the agent's heading frame.
 inline Quat InverseHeadingRotation(const Quat& q) { return HeadingRotation(q).conjugate(); }
