@@ -12,3 +12,13 @@ B="$MODSKILL_BUILD_DIR"
 # turning skills are data/policies/strike_turns/skills.
 F="--init_from data/policies/strike_turns/skills/policy.pt --controller_input proprioception --loop_clips --anchor_reference --anchor_position_only"
 bench/learning_bench.sh --out runs/heading_skills --minutes 22 --server_flags "--no_generative --motions runs/turn_lib" posonly="$F"
+# Heads over the new skills with the base motion steered at 60 deg/s, side by side, 20 minutes each.
+S=runs/heading_skills/posonly/policy.pt
+bench/task_bench.sh --out runs/steer_steered --skills $S --minutes 20 --motions deepmimic_walk --eval_episodes 64 \
+  --server_flags "--motions runs/turn_lib" \
+  steered="--task steer --task_log_std -3 --learning_rate 5e-5 --update_threads 1 --task_steering_rate 60" &
+sleep 10
+bench/task_bench.sh --out runs/strike_steered --skills $S --minutes 20 --motions walk_arm_forward --eval_episodes 64 \
+  --server_flags "--motions runs/turn_lib" \
+  steered="--task strike --task_log_std -2.5 --learning_rate 1e-4 --energy_weight 0 --update_threads 1 --task_steering_rate 60"
+wait
