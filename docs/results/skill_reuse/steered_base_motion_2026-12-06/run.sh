@@ -22,3 +22,7 @@ bench/task_bench.sh --out runs/strike_steered --skills $S --minutes 20 --motions
   --server_flags "--motions runs/turn_lib" \
   steered="--task strike --task_log_std -2.5 --learning_rate 1e-4 --energy_weight 0 --update_threads 1 --task_steering_rate 60"
 wait
+# A strike head with a smaller step, alone, 25 minutes (after the two heads above).
+bench/task_bench.sh --out runs/strike_steered_small --skills $S --minutes 25 --motions walk_arm_forward --eval_episodes 64 \
+  --server_flags "--motions runs/turn_lib" \
+  small_step="--task strike --task_log_std -3 --learning_rate 3e-5 --energy_weight 0 --task_steering_rate 60"
