@@ -449,7 +449,7 @@ absl::StatusOr<TrainerConfig> ConfigFromFlags(const std::string& token) {
   if (const double critic_rate = absl::GetFlag(FLAGS_critic_learning_rate); critic_rate != -1) {
     config->critic_learning_rate = critic_rate;
     config->critic_learning_rate_given = true;
-  } else if (absl::GetFlag(FLAGS_preset) == "small" && config->task == "tracking") {
+  } else if (absl::GetFlag(FLAGS_preset) == "small" && IsTrackingTask(config->task)) {
     config->critic_learning_rate = kSmallTrackingCriticLearningRate;
   }
   if (absl::GetFlag(FLAGS_log_std) != 0) config->model.log_std = absl::GetFlag(FLAGS_log_std);

@@ -33,10 +33,7 @@ void PlanarMotion::Apply(HumanoidState* state) const {
 }
 
 PlanarMotion AnchorToCharacter(const HumanoidState& anchor, const HumanoidState& sim, HumanoidState* target) {
-  const PlanarMotion motion =
-      PlanarMotion::Between(anchor.body_pos[0], anchor.body_rot[0], sim.body_pos[0], sim.body_rot[0]);
-  motion.Apply(target);
-  return motion;
+  return AnchorToHeading(anchor, sim, HeadingAngle(sim.body_rot[0]), target);
 }
 
 double SteerHeading(double heading, const HumanoidState& sim, const Vec3& toward, double max_turn) {

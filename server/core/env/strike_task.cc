@@ -11,6 +11,16 @@ namespace {
 
 Vec3 Read3(const double* v) { return Vec3(v[0], v[1], v[2]); }
 
+// How far the target at free-joint qpos `q` has tipped: 1 - up . u_target (0 standing, 1 lying).
+double TipOf(const double* q) {
+  const double up = (Quat(q[3], q[4], q[5], q[6]).normalized() * Vec3::UnitZ()).z();
+  return std::clamp(1.0 - up, 0.0, 1.0);
+}
+
+// Tipped past this, the target counts as down: the approach term is paid in full and a steered
+// base motion turns away from it.
+constexpr double kDownTip = 0.5;
+
 void Write3(const Vec3& v, float* out) {
   out[0] = static_cast<float>(v.x());
   out[1] = static_cast<float>(v.y());
@@ -44,15 +54,13 @@ void StrikeTask::Reset(const HumanoidState& sim, mjData* data, std::mt19937_64& 
 
 void StrikeTask::Reward(const HumanoidState& sim, const mjData* data, float* terms) {
   const double* q = data->qpos + context_->target_qpos;
-  const Quat rotation(q[3], q[4], q[5], q[6]);
-  const double up = (rotation.normalized() * Vec3::UnitZ()).z();
-  const double tip = std::clamp(1.0 - up, 0.0, 1.0);
+  const double tip = TipOf(q);
   terms[0] = static_cast<float>(kTipWeight * tip);
   Vec3 to_target = Read3(q) - sim.body_pos[0];
   to_target.z() = 0;
   const double distance = to_target.norm();
   double approach = 1;
-  if (distance > kNearDistance && tip < 0.5) {
+  if (distance > kNearDistance && tip < kDownTip) {
     const double toward = sim.body_vel[0].dot(to_target / distance);
     const double shortfall = std::max(0.0, kApproachSpeed - toward);
     approach = toward > 0 ? std::exp(-4 * shortfall * shortfall) : 0;
@@ -74,15 +82,14 @@ bool StrikeTask::Failed(const mjData* data) const {
 }
 
 Vec3 StrikeTask::GoalBearing(const HumanoidState& sim, const mjData* data) const {
-  Vec3 to_target = Read3(data->qpos + context_->target_qpos) - sim.body_pos[0];
+  const double* q = data->qpos + context_->target_qpos;
+  Vec3 to_target = Read3(q) - sim.body_pos[0];
   to_target.z() = 0;
   const double distance = to_target.norm();
   if (distance < 1e-9) return to_target;
   const Vec3 left = Vec3(-to_target.y(), to_target.x(), 0.0) / distance;
-  const double* q = data->qpos + context_->target_qpos;
-  const double up = (Quat(q[3], q[4], q[5], q[6]).normalized() * Vec3::UnitZ()).z();
   // Down: turn left, away from where it lies, rather than walk over it.
-  if (up < 0.5) return left;
+  if (TipOf(q) > kDownTip) return left;
   return to_target + kHandOffset * left;
 }
 
