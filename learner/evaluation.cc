@@ -176,6 +176,8 @@ PolicySpec PolicySpecOf(const v1::EnvSpec& spec, const ActionMapping& action) {
   policy.control_dt = spec.control_dt();
   policy.action = action;
   if (!spec.task().empty()) policy.task = spec.task();
+  // A server from before the field sends 0: it showed one frame.
+  policy.reference_frames = std::max(1, spec.reference_frames());
   return policy;
 }
 

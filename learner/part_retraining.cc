@@ -62,6 +62,11 @@ absl::StatusOr<RetrainedTracker> LoadTrackerForRetraining(const std::string& pat
                                spec.action.residual_scale, "); this run uses ", ActionModeName(action.mode),
                                " (residual_scale ", action.residual_scale, ")"));
   }
+  if (spec.obs_size != layout.obs_size) {
+    return misfit(absl::StrCat("observes ", spec.reference_frames, " reference frame", spec.reference_frames > 1 ? "s" : "",
+                               " (obs ", spec.obs_size, "); this run's sessions show obs ", layout.obs_size,
+                               " (give --reference_frames ", spec.reference_frames, ")"));
+  }
   auto parts = PartIndices(train_parts, layout_name, layout);
   if (!parts.ok()) return parts.status();
   auto rebuilt = RebuildTracker(*exported, layout);

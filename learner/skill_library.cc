@@ -39,6 +39,11 @@ absl::StatusOr<SkillLibrary> SkillLibrary::Load(const std::string& path) {
   if (spec.task != kTrackingTask) {
     return invalid(absl::StrCat("a policy for task ", spec.task, ", not a tracker (skills come from a tracking run's policy.pt)"));
   }
+  if (spec.reference_frames > 1) {
+    return invalid(absl::StrCat("a tracker observing ", spec.reference_frames,
+                                " reference frames; a task's base motion shows its skills one (train them with "
+                                "--reference_frames 1)"));
+  }
   if (library.policy_.Has("whole_body_controller_fc0_weight")) {
     return invalid(absl::StrCat("one whole-body controller (--whole_body), no part controllers to reuse", kRetrain));
   }

@@ -75,6 +75,7 @@ absl::StatusOr<std::unique_ptr<Trainer>> Trainer::Create(const TrainerConfig& co
   if (!IsTrackingTask(config.task)) {
     if (absl::Status status = trainer->PrepareTask(); !status.ok()) return trainer->ReportToRanks(status);
   }
+  trainer->ChooseReferenceFrames();  // before the sessions open: it sets their observation
   absl::StatusOr<std::unique_ptr<ServerPool>> pool = ServerPool::Create(trainer->PoolOptions());
   if (!pool.ok()) return trainer->ReportToRanks(pool.status());
   trainer->servers_ = *std::move(pool);
@@ -123,6 +124,7 @@ ServerPoolOptions Trainer::PoolOptions() const {
   pool.session.set_loop_clips(config.loop_clips);
   pool.session.set_anchor_reference(config.anchor_reference);
   pool.session.set_anchor_position_only(config.anchor_position_only);
+  pool.session.set_reference_frames(config.reference_frames);
   for (const std::string& part : config.reward_parts) pool.session.add_reward_parts(part);
   pool.session.set_reward_relative_to_root(config.reward_relative_to_root);
   if (config.energy_weight != 1.0) pool.session.set_energy_weight(static_cast<float>(config.energy_weight));
@@ -164,20 +166,32 @@ absl::Status Trainer::WaitForServers() {
   }
 }
 
+bool Trainer::ReadResumeArchive() {
+  if (resume_archive_) return true;
+  const std::string path = config_.run_dir + "/checkpoint.pt";
+  auto bytes = ReadFileToString(path, kMaxCheckpointBytes);
+  auto archive = bytes.ok() ? LoadCheckpointArchive(*bytes, path) : bytes.status();
+  if (!archive.ok()) return false;
+  resume_archive_ = *std::move(archive);
+  return true;
+}
+
+void Trainer::ChooseReferenceFrames() {
+  if (!config_.resume || config_.reference_frames_given || !writes_run_dir() || data_parallel_) return;
+  if (!ReadResumeArchive()) return;
+  torch::Tensor stored = torch::tensor(int64_t{1});
+  resume_archive_->try_read("reference_frames", stored);
+  config_.reference_frames = static_cast<int>(stored.item<int64_t>());
+}
+
 absl::Status Trainer::ChooseAmpFrames() {
   // A run resumed without --amp_frames reads what its checkpoint's discriminator read, so that
   // checkpoints from before the flag (the whole history) and from a preset with fewer frames resume.
   if (config_.resume && !config_.amp_frames_given && writes_run_dir() && !data_parallel_ &&
-      layout_.amp_obs_per_frame > 0) {
-    const std::string path = config_.run_dir + "/checkpoint.pt";
-    auto bytes = ReadFileToString(path, kMaxCheckpointBytes);
-    auto archive = bytes.ok() ? LoadCheckpointArchive(*bytes, path) : bytes.status();
-    if (archive.ok()) {  // otherwise LoadCheckpoint reports the file it cannot load
-      resume_archive_ = *std::move(archive);
-      const absl::StatusOr<int64_t> stored = CheckpointAmpObsSize(*resume_archive_, path);
-      if (stored.ok() && *stored % layout_.amp_obs_per_frame == 0) {
-        config_.model.amp_frames = *stored / layout_.amp_obs_per_frame;
-      }
+      layout_.amp_obs_per_frame > 0 && ReadResumeArchive()) {
+    const absl::StatusOr<int64_t> stored = CheckpointAmpObsSize(*resume_archive_, config_.run_dir + "/checkpoint.pt");
+    if (stored.ok() && *stored % layout_.amp_obs_per_frame == 0) {
+      config_.model.amp_frames = *stored / layout_.amp_obs_per_frame;
     }
   }
   return ReadAmpFrames(config_.model.amp_frames, &layout_);

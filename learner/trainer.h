@@ -128,6 +128,12 @@ class Trainer {
   // How many of the server's AMP frames the discriminator reads (--amp_frames, or on resume the
   // checkpoint's), set in layout_.amp_obs_size.
   absl::Status ChooseAmpFrames();
+  // A run resumed without --reference_frames observes as many frames as its checkpoint's policy
+  // (one for checkpoints from before the flag), so a preset's default cannot change it midway.
+  void ChooseReferenceFrames();
+  // The resumed run's checkpoint, deserialized once into resume_archive_; false (LoadCheckpoint
+  // reports why) when it cannot be read.
+  bool ReadResumeArchive();
   // Networks, then the resumed checkpoint (rank 0), then the start state shared by every rank.
   absl::Status PrepareState();
   // Seeds of what must differ between data-parallel ranks (sessions, action noise, reference

@@ -48,6 +48,7 @@ absl::StatusOr<std::string> Trainer::SerializeState() {
     archive.write("residual_scale", torch::tensor(config_.residual_scale, torch::kFloat64));
     archive.write("termination_distance", torch::tensor(curriculum_.distance(), torch::kFloat64));
     archive.write("task", c10::IValue(layout_.task));
+    archive.write("reference_frames", torch::tensor(static_cast<int64_t>(config_.reference_frames)));
     archive.write("world_size", torch::tensor(static_cast<int64_t>(config_.data_parallel.world_size)));
     archive.write("controller_hidden", torch::tensor(config_.model.controller_hidden, torch::kInt64));
     archive.write("critic_hidden", torch::tensor(config_.model.critic_hidden, torch::kInt64));
@@ -162,6 +163,15 @@ absl::Status Trainer::RestoreState(torch::serialize::InputArchive& archive, cons
     if (task != layout_.task) {
       return absl::FailedPreconditionError(
           absl::StrCat(path, ": trained for task ", task, "; resume with --task ", task));
+    }
+    // Before the obs size, which a different count of reference frames changes (checkpoints from
+    // before the flag observed one).
+    torch::Tensor reference_frames = torch::tensor(int64_t{1});
+    archive.try_read("reference_frames", reference_frames);
+    if (reference_frames.item<int64_t>() != config_.reference_frames) {
+      return absl::FailedPreconditionError(absl::StrCat(
+          path, ": trained with --reference_frames ", reference_frames.item<int64_t>(), "; resume with --reference_frames ",
+          reference_frames.item<int64_t>(), ", not ", config_.reference_frames));
     }
     torch::Tensor obs_size, action_size, amp_obs_size, iteration, env_steps;
     archive.read("obs_size", obs_size);

@@ -11,6 +11,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
 #include "absl/strings/str_split.h"
+#include "common/policy/reference_frames.h"
 #include "common/task_settings.h"
 #include "learner/server_discovery.h"
 
@@ -76,9 +77,18 @@ absl::Status ValidateTask(const TrainerConfig& c) {
       {"--reward_parts", !c.reward_parts.empty()},
       {"--reward_relative_to_root", c.reward_relative_to_root},
       {"--loop_clips", c.loop_clips},
-      {"--anchor_reference", c.anchor_reference}};
+      {"--anchor_reference", c.anchor_reference},
+      {"--reference_frames", c.reference_frames > 1}};
   if (c.anchor_position_only && !c.anchor_reference) {
     return absl::InvalidArgumentError("--anchor_position_only: only with --anchor_reference");
+  }
+  if (absl::Status status = ValidateReferenceFrames(c.reference_frames, "--reference_frames"); !status.ok()) {
+    return status;
+  }
+  if (c.reference_frames > 1 && (c.loop_clips || c.anchor_reference)) {
+    return absl::InvalidArgumentError(absl::StrCat("--reference_frames: ", c.reference_frames, " with ",
+                                                   c.loop_clips ? "--loop_clips" : "--anchor_reference",
+                                                   "; only a clip tracked where it is"));
   }
   for (const auto& [flag, given] : tracking_only) {
     if (given && !IsTrackingTask(c.task)) {
@@ -334,6 +344,7 @@ std::string TrainerConfig::ToJson() const {
   json["loop_clips"] = loop_clips;
   json["anchor_reference"] = anchor_reference;
   if (anchor_position_only) json["anchor_position_only"] = true;
+  if (reference_frames != 1) json["reference_frames"] = reference_frames;
   if (!init_from.empty()) {
     json["init_from"] = init_from;
     json["train_parts"] = train_parts;

@@ -93,6 +93,11 @@ struct TrainerConfig {
   // heading error stays until won back (SessionConfig.anchor_position_only): skills that follow a
   // base motion a goal task steers (--task_steering_rate).
   bool anchor_position_only = false;
+  // Tracking: the upcoming reference frames each body observes (SessionConfig.reference_frames,
+  // MimicKit's tar_obs_steps 1..N); not with loop_clips or anchor_reference.
+  int reference_frames = 1;
+  // Given on the command line (a resume without it takes the checkpoint's count).
+  bool reference_frames_given = false;
   // SessionConfig.task_settings; 0 in a field: the server's default.
   double task_min_speed = 0, task_max_speed = 0, task_min_goal_interval_s = 0, task_max_goal_interval_s = 0;
   // reach's target box: its edge (m; 0: the server's 2 m) and its centre, forward, left, height

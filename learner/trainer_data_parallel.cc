@@ -52,6 +52,7 @@ std::vector<SharedSetting> SharedSettings(const TrainerConfig& c) {
       {"loop_clips", Text(c.loop_clips)},
       {"anchor_reference", Text(c.anchor_reference)},
       {"anchor_position_only", Text(c.anchor_position_only)},
+      {"reference_frames", absl::StrCat(c.reference_frames)},
       {"reward_parts", absl::StrJoin(c.reward_parts, ",")},
       {"reward_relative_to_root", Text(c.reward_relative_to_root)},
       {"frozen_parts_act_on_mean", Text(c.frozen_parts_act_on_mean)},

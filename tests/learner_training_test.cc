@@ -277,6 +277,52 @@ TEST(LearnerTrainingTest, DiscriminatorReadsTheNewestAmpFramesAcrossAResume) {
   server->Shutdown(absl::Seconds(1));
 }
 
+// --reference_frames: the sessions observe that many upcoming frames, policy.pt records the count,
+// and the server's Rollout runs the policy with as many (a 1-frame env would not fit it); skills
+// that observe more than one frame are refused for a task, naming the count.
+TEST(LearnerTrainingTest, ReferenceFramesTrainExportAndRollOutWithTheirCount) {
+  auto server = StartTestServer();
+  const std::string dir = RunDir("reference_frames");
+  TrainerConfig config = SmallConfig({server->port()}, dir);
+  config.iterations = 1;
+  config.reference_frames = 3;
+  auto trainer = Trainer::Create(config);
+  ASSERT_TRUE(trainer.ok()) << trainer.status();
+  ASSERT_TRUE((*trainer)->Run().ok());
+  EXPECT_EQ((*trainer)->spec().obs_size(), 358 + 3 * 576);
+  EXPECT_EQ((*trainer)->spec().reference_frames(), 3);
+  auto exported = PolicyCheckpoint::LoadFile(dir + "/policy.pt");
+  ASSERT_TRUE(exported.ok()) << exported.status();
+  EXPECT_EQ((*exported)->spec().reference_frames, 3);
+  EXPECT_EQ((*exported)->spec().obs_size, 358 + 3 * 576);
+  auto client = ConnectTo(*server);
+  auto report = Evaluate(*client, dir + "/policy.pt", *ReadFileToString(dir + "/policy.pt", 1 << 30),
+                         {"deepmimic_walk"});
+  ASSERT_TRUE(report.ok()) << report.status();
+  ASSERT_EQ(report->clips.size(), 1u);
+  EXPECT_GT(report->clips[0].steps(), 0);
+
+  auto skills = SkillLibrary::Load(dir + "/policy.pt");
+  ASSERT_FALSE(skills.ok());
+  EXPECT_THAT(std::string(skills.status().message()), HasSubstr("observing 3 reference frames"));
+
+  // A resume without the flag observes as many frames as its checkpoint; with another count it is
+  // refused, naming the flag.
+  config.resume = true;
+  config.reference_frames = 1;
+  auto resumed = Trainer::Create(config);
+  ASSERT_TRUE(resumed.ok()) << resumed.status();
+  EXPECT_EQ((*resumed)->config().reference_frames, 3);
+  EXPECT_EQ((*resumed)->spec().obs_size(), 358 + 3 * 576);
+  resumed->reset();
+  config.reference_frames_given = true;
+  auto other_count = Trainer::Create(config);
+  ASSERT_FALSE(other_count.ok());
+  EXPECT_EQ(other_count.status().code(), absl::StatusCode::kFailedPrecondition);
+  EXPECT_THAT(std::string(other_count.status().message()), HasSubstr("resume with --reference_frames 3, not 1"));
+  server->Shutdown(absl::Seconds(1));
+}
+
 // --controller_hidden / --critic_hidden: the widths build the networks, travel in the
 // checkpoint, and a resume with other widths is refused with the flag to repeat.
 TEST(LearnerTrainingTest, NetworkWidthsTrainAndResumeOnlyWithTheirOwn) {
@@ -552,6 +598,11 @@ TEST(LearnerTrainingTest, BadConfigurationsAreClearErrors) {
       {[&](TrainerConfig* c) { c->task_max_goal_interval_s = nan; }, "--task_max_goal_interval_s"},
       {[](TrainerConfig* c) { c->task_min_goal_interval_s = 6; }, "--task_max_goal_interval_s"},
       {[](TrainerConfig* c) { c->task_steering_rate = -30; }, "--task_steering_rate"},
+      {[](TrainerConfig* c) { c->reference_frames = 0; }, "--reference_frames: 0 is not in [1, 8]"},
+      {[](TrainerConfig* c) { c->reference_frames = 9; }, "--reference_frames: 9 is not in [1, 8]"},
+      {[](TrainerConfig* c) { c->reference_frames = 2, c->loop_clips = true; }, "--reference_frames: 2 with --loop_clips"},
+      {[](TrainerConfig* c) { c->reference_frames = 2, c->task = "steer", c->skills = "skills.pt"; },
+       "--reference_frames: tracking only"},
       {[&](TrainerConfig* c) { c->task_steering_rate = nan; }, "--task_steering_rate"},
       {[](TrainerConfig* c) {
          c->task = "reach", c->skills = "skills.pt", c->task_parts = {"R_Arm"}, c->model.task_skill_prior = false;

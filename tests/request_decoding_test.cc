@@ -207,6 +207,28 @@ TEST(PolicySpecTest, TaskAndControllerInputRoundTripWithDefaultsForOldFiles) {
   }
 }
 
+// reference_frames: recorded and read back; files from before it observed one frame; a count
+// outside [1, 8], a non-integer or a task policy with more than one is INVALID_ARGUMENT naming it.
+TEST(PolicySpecTest, ReferenceFramesRoundTripWithOneForOldFiles) {
+  const std::string head =
+      R"({"part_layout": "5part", "obs_size": 3, "action_size": 1, "joint_names": ["a"], "control_dt": 0.03)";
+  auto old_spec = PolicySpec::FromJson(head + "}");
+  ASSERT_TRUE(old_spec.ok()) << old_spec.status();
+  EXPECT_EQ(old_spec->reference_frames, 1);
+  PolicySpec lookahead = *old_spec;
+  lookahead.reference_frames = 3;
+  auto again = PolicySpec::FromJson(lookahead.ToJson());
+  ASSERT_TRUE(again.ok()) << again.status();
+  EXPECT_EQ(again->reference_frames, 3);
+  for (const char* tail : {R"(, "reference_frames": 0)", R"(, "reference_frames": 9)",
+                           R"(, "reference_frames": 2.5)", R"(, "reference_frames": "3")",
+                           R"(, "reference_frames": 2, "task": "steer")"}) {
+    auto bad = PolicySpec::FromJson(head + tail + "}");
+    EXPECT_EQ(bad.status().code(), absl::StatusCode::kInvalidArgument) << tail;
+    EXPECT_THAT(std::string(bad.status().message()), ::testing::HasSubstr("reference_frames")) << tail;
+  }
+}
+
 // A family's clip, frames and ranges: recorded and read back; bad ones are INVALID_ARGUMENT naming
 // the field; the elite file parses only as finite elites of the family's size.
 TEST(PolicySpecTest, FamilyFieldsRoundTripAndBadOnesAreNamed) {

@@ -142,6 +142,24 @@ TEST_F(SimulationServerTest, BadTasksAreRejectedNamingTheField) {
   gravity->set_lo(5);
   gravity->set_hi(9);
   cases.push_back({config, "anchor_reference: not for a family session"});
+  config = Config(2);
+  config.set_reference_frames(9);
+  cases.push_back({config, "reference_frames: 9 is not in [1, 8]"});
+  config = Config(2);
+  config.set_reference_frames(-1);
+  cases.push_back({config, "reference_frames: -1 is not in [1, 8]"});
+  config = Config(2);
+  config.set_task("steer");
+  config.set_reference_frames(2);
+  cases.push_back({config, "reference_frames: 2 for task steer; tracking only"});
+  config = Config(2);
+  config.set_loop_clips(true);
+  config.set_reference_frames(3);
+  cases.push_back({config, "reference_frames: 3 with loop_clips"});
+  config = Config(2);
+  config.set_anchor_reference(true);
+  config.set_reference_frames(3);
+  cases.push_back({config, "reference_frames: 3 with anchor_reference"});
   for (const Case& c : cases) {
     auto stream = client_->OpenSession(c.config);
     ASSERT_FALSE(stream.ok()) << c.message;

@@ -116,6 +116,69 @@ TEST(TrackingEnvTest, ResetOntoReferenceHasZeroDeltasAndMaximalReward) {
   }
 }
 
+// SessionConfig.reference_frames: each body's observation holds one task block per upcoming
+// frame, the next one first, and a frame past the clip's end repeats its last; block 0 and the
+// self features are what a one-frame tracker observes.
+TEST(TrackingEnvTest, ObservesUpcomingReferenceFramesClampedAtTheClipsEnd) {
+  EnvBatchConfig config = SmallConfig(1);
+  config.env.reference_frames = 3;
+  auto batch = MakeBatch(config);
+  ASSERT_NE(batch, nullptr);
+  auto one_frame = MakeBatch(SmallConfig(1));
+  ASSERT_NE(one_frame, nullptr);
+  const EnvSpec& spec = batch->spec();
+  EXPECT_EQ(spec.reference_frames, 3);
+  EXPECT_EQ(spec.obs_size, 358 + 3 * 576);
+  EXPECT_EQ(spec.task_obs_size, 3 * 576);
+  const int clip = batch->motions().Find("deepmimic_walk");
+  ASSERT_GE(clip, 0);
+  const MotionClip& walk = batch->motions().clip(clip);
+  const int last = walk.num_frames - 1;
+  HumanoidState sim, upcoming;
+  sim.Resize(24, 69);
+  upcoming.Resize(24, 69);
+  for (int frame : {5, last - 2}) {
+    batch->env(0).ResetTo(clip, frame, batch->row(0));
+    one_frame->env(0).ResetTo(clip, frame, one_frame->row(0));
+    ReadSimulatedState(batch->humanoid(), batch->env(0).data(), &sim);
+    const float* obs = batch->buffers().obs.data();
+    const float* single = one_frame->buffers().obs.data();
+    for (int body = 0; body < 24; ++body) {
+      const int self = body == 0 ? kSelfFeaturesRoot : kSelfFeaturesPerBody;
+      const float* mine = obs + spec.body_obs_start[body];
+      const float* theirs = single + one_frame->spec().body_obs_start[body];
+      for (int f = 0; f < self + kTaskFeaturesPerBody; ++f) {
+        ASSERT_EQ(mine[f], theirs[f]) << "frame " << frame << " body " << body << " feature " << f;
+      }
+      for (int k = 1; k < 3; ++k) {
+        ReadReferenceState(walk, std::min(frame + 1 + k, last), &upcoming);
+        float expected[kTaskFeaturesPerBody];
+        WriteBodyTaskFeatures(sim, upcoming, body, expected);
+        for (int f = 0; f < kTaskFeaturesPerBody; ++f) {
+          ASSERT_NEAR(mine[self + k * kTaskFeaturesPerBody + f], expected[f], 1e-6)
+              << "frame " << frame << " block " << k << " body " << body << " feature " << f;
+        }
+      }
+    }
+  }
+  // Near the end the last two blocks both show the clip's last frame.
+  const int root_block = spec.body_obs_start[0] + kSelfFeaturesRoot;
+  const float* obs = batch->buffers().obs.data();
+  for (int f = 0; f < kTaskFeaturesPerBody; ++f) {
+    EXPECT_EQ(obs[root_block + kTaskFeaturesPerBody + f], obs[root_block + 2 * kTaskFeaturesPerBody + f]) << f;
+  }
+  // A step keeps the layout: the next observation's block 1 is the frame two steps ahead.
+  batch->env(0).ResetTo(clip, 5, batch->row(0));
+  ASSERT_TRUE(batch->Step(ReferenceActions(*batch)).ok());
+  ReadSimulatedState(batch->humanoid(), batch->env(0).data(), &sim);
+  ReadReferenceState(walk, 8, &upcoming);
+  float expected[kTaskFeaturesPerBody];
+  WriteBodyTaskFeatures(sim, upcoming, 0, expected);
+  for (int f = 0; f < kTaskFeaturesPerBody; ++f) {
+    EXPECT_NEAR(batch->buffers().obs[root_block + kTaskFeaturesPerBody + f], expected[f], 1e-6) << f;
+  }
+}
+
 TEST(TrackingEnvTest, TrackingReferenceActionsKeepsTheEpisodeAlive) {
   auto batch = MakeBatch(SmallConfig(1));
   ASSERT_NE(batch, nullptr);
@@ -435,6 +498,17 @@ TEST(EnvBatchTest, BadConfigsAreErrors) {
   ASSERT_FALSE(substeps.ok());
   EXPECT_NE(substeps.status().message().find("substeps"), std::string::npos);
   EXPECT_FALSE(EnvBatch::Create(SmallConfig(2), std::make_shared<const MotionLibrary>()).ok());
+  for (int frames : {0, 9}) {
+    config = SmallConfig(2);
+    config.env.reference_frames = frames;
+    auto bad = EnvBatch::Create(config, DefaultMotions());
+    ASSERT_FALSE(bad.ok()) << frames;
+    EXPECT_NE(bad.status().message().find("reference_frames"), std::string::npos);
+  }
+  config = SmallConfig(2);
+  config.env.reference_frames = 2;
+  config.env.loop_clips = true;
+  EXPECT_FALSE(EnvBatch::Create(config, DefaultMotions()).ok());
 }
 
 TEST(ClipSamplerTest, FollowsWeightsAndRejectsBadOnes) {

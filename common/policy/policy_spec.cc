@@ -21,6 +21,7 @@ std::string PolicySpec::ToJson() const {
   json["residual_scale"] = action.residual_scale;
   json["task"] = task;
   json["controller_input"] = controller_input;
+  if (reference_frames != 1) json["reference_frames"] = reference_frames;
   if (is_family()) {
     json["family_clip"] = family_clip;
     json["family_frames"] = family_frames;
@@ -135,7 +136,26 @@ absl::StatusOr<PolicySpec> PolicySpec::FromJson(absl::string_view text) {
                                                      ShownValue(spec.controller_input), " is not ",
                                                      kPartObsControllerInput, " or ", kProprioceptionControllerInput));
     }
+    if (json.contains("reference_frames")) {
+      if (!json.at("reference_frames").is_number_integer()) {
+        return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": reference_frames: ",
+                                                       ShownValue(json.at("reference_frames").dump()),
+                                                       " is not an integer"));
+      }
+      const int64_t frames = json.at("reference_frames").get<int64_t>();
+      if (frames < 1 || frames > kMaxReferenceFrames) {
+        return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": reference_frames: ", frames,
+                                                       " is not in [1, ", kMaxReferenceFrames, "]"));
+      }
+      spec.reference_frames = static_cast<int>(frames);
+    }
     if (absl::Status status = ReadFamily(json, &spec); !status.ok()) return status;
+    if (spec.reference_frames > 1 && (spec.task != kTrackingTask || spec.is_family())) {
+      return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": reference_frames: ",
+                                                     spec.reference_frames, " for ",
+                                                     spec.is_family() ? "a family" : "task " + spec.task,
+                                                     "; only a tracker observes more than one"));
+    }
   } catch (const nlohmann::json::exception& e) {
     return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": ", ShownValue(e.what())));
   }

@@ -13,6 +13,7 @@
 #include "absl/strings/string_view.h"
 #include "common/policy/action_mode.h"
 #include "common/policy/family_parameters.h"
+#include "common/policy/reference_frames.h"
 
 namespace modskill {
 
@@ -44,6 +45,9 @@ struct PolicySpec {
   // "proprioception" (its bodies' self features only; such controllers can be reused by a task
   // policy, learner/skill_library.h).
   std::string controller_input = kPartObsControllerInput;
+  // How many upcoming reference frames a tracker observes (reference_frames.h); policies from
+  // before the field observed one.
+  int reference_frames = 1;
   // A motor-skill family's policy (learner/family/family_export.h): the clip it grew from, that
   // clip's frame count and the ranges its observation normalizes a over (EnvSpec.family). Empty
   // family: a tracking or task policy.
@@ -57,7 +61,8 @@ struct PolicySpec {
   // INVALID_ARGUMENT naming the field for anything but a JSON object whose sizes lie in
   // [1, kMaxPolicyVectorSize], control_dt in (0, 10) s, action mapping is valid, task is a
   // lower-case name ([a-z0-9_], 1 to 32 characters) and controller_input part_obs or
-  // proprioception. Absent task and controller_input read as "tracking" and "part_obs". A
+  // proprioception, reference_frames in [1, kMaxReferenceFrames] (only a tracker's above 1).
+  // Absent task and controller_input read as "tracking" and "part_obs". A
   // family's ranges pass ValidateParamRange with no name twice, its clip is named and its
   // frames in [2, 1e6].
   static absl::StatusOr<PolicySpec> FromJson(absl::string_view json);

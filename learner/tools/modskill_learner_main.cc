@@ -95,6 +95,10 @@ ABSL_FLAG(bool, anchor_position_only, false,
           "with --anchor_reference: carry the reference onto the character's root position only; it keeps the "
           "clip's heading, so the skills learn to win back a heading error and follow a steered base motion "
           "(--task_steering_rate)");
+ABSL_FLAG(int32_t, reference_frames, -1,
+          "tracking: how many upcoming reference frames each body observes (the next one and N - 1 after it, "
+          "MimicKit's tar_obs_steps), in [1, 8]; not with --loop_clips or --anchor_reference. Default 1; a --resume "
+          "keeps its checkpoint's");
 ABSL_FLAG(double, task_log_std, -2.9, "--task: fixed log standard deviation of the task policy in z space");
 ABSL_FLAG(bool, task_skill_prior, true,
           "--task steer|reach|strike: z = normalize(z_prior + task head), z_prior from the tracker's frozen attention on "
@@ -396,6 +400,10 @@ absl::Status TaskFromFlags(TrainerConfig* config) {
   config->anchor_reference = absl::GetFlag(FLAGS_anchor_reference);
   config->anchor_position_only = absl::GetFlag(FLAGS_anchor_position_only);
   config->init_from = absl::GetFlag(FLAGS_init_from);
+  if (const int frames = absl::GetFlag(FLAGS_reference_frames); frames != -1) {
+    config->reference_frames = frames;
+    config->reference_frames_given = true;
+  }
   config->train_parts = absl::GetFlag(FLAGS_train_parts);
   config->reward_parts = absl::GetFlag(FLAGS_reward_parts);
   config->reward_relative_to_root = absl::GetFlag(FLAGS_reward_relative_to_root);

@@ -32,6 +32,7 @@ void ToProto(const EnvSpec& spec, const HumanoidModel& humanoid, v1::EnvSpec* ou
   out->set_obs_size(spec.obs_size);
   out->set_self_obs_size(spec.self_obs_size);
   out->set_task_obs_size(spec.task_obs_size);
+  out->set_reference_frames(spec.reference_frames);
   out->set_action_size(spec.action_size);
   out->set_amp_obs_per_frame(spec.amp_obs_per_frame);
   out->set_amp_history(kAmpHistory);

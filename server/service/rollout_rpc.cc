@@ -228,7 +228,7 @@ grpc::Status SimulationService::Rollout(grpc::ServerContext* context, const v1::
   }
   absl::StatusOr<TaskKind> task = RolloutTask(*request, trained);
   if (!task.ok()) return ToGrpcStatus(task.status());
-  EnvSpec env_spec = MakeEnvSpec(*humanoid_, *layout, *task);
+  EnvSpec env_spec = MakeEnvSpec(*humanoid_, *layout, *task, trained.reference_frames);
   if (trained.is_family()) AddFamilyToSpec(trained.family, &env_spec);
   if (absl::Status status = CheckPolicyFitsEnv(trained, env_spec, TaskInfoOf(*task).name); !status.ok()) {
     return ToGrpcStatus(status);
@@ -237,6 +237,7 @@ grpc::Status SimulationService::Rollout(grpc::ServerContext* context, const v1::
   absl::StatusOr<RolloutOptions> options = RolloutOptionsFor(*request, trained.action);
   if (!options.ok()) return ToGrpcStatus(options.status());
   options->task = *task;
+  options->reference_frames = env_spec.reference_frames;
   if (absl::Status status = CheckSkillRequest(*request, **policy, *task); !status.ok()) return ToGrpcStatus(status);
   std::shared_ptr<const MotionLibrary> motions = motions_.Snapshot();
   std::vector<double> family_a;

@@ -310,6 +310,18 @@ class ClientTest(unittest.TestCase):
             with self.client.session(1, imitation_kernels={"rot": -2.0}) as session:
                 session.step(np.zeros((1, 69), np.float32))
         self.assertIn("imitation_kernels.rot", caught.exception.message)
+        # reference_frames=3: three task blocks per body, the first the one-frame session's.
+        with self.client.session(1, reference_frames=3, **kwargs) as ahead, \
+                self.client.session(1, **kwargs) as next_only:
+            self.assertEqual(ahead.spec.reference_frames, 3)
+            self.assertEqual(ahead.spec.obs_size, 358 + 3 * 576)
+            first_body = ahead.spec.parts[0].self_obs[0]  # its self features, then its task blocks
+            block0 = slice(first_body.start, first_body.stop + 24)
+            np.testing.assert_array_equal(ahead.initial.obs[0, block0], next_only.initial.obs[0, block0])
+        with self.assertRaises(modskill.ServerError) as caught:
+            with self.client.session(1, reference_frames=2, loop_clips=True) as session:
+                session.step(np.zeros((1, 69), np.float32))
+        self.assertIn("reference_frames", caught.exception.message)
 
     def test_action_modes_and_termination_distance(self):
         self.assertEqual(list(self.client.describe().action_modes), ["absolute", "residual"])

@@ -381,7 +381,7 @@ class Client:
                 family: Optional[Mapping[str, Union[float, Tuple[float, float]]]] = None,
                 reward_parts: Sequence[str] = (), reward_relative_to_root: bool = False,
                 anchor_reference: bool = False, anchor_position_only: bool = False, energy_weight: Optional[float] = None,
-                imitation_kernels: Optional[Mapping[str, float]] = None) -> "Session":
+                imitation_kernels: Optional[Mapping[str, float]] = None, reference_frames: int = 0) -> "Session":
         """Opens a simulation session of ``num_envs`` envs and returns it once the server has
         reset them (``Session.initial`` holds the first observations).
 
@@ -428,6 +428,9 @@ class Client:
             0 turns it off (its ``reward_terms`` column stays, at 0).
           imitation_kernels: tracking only: the imitation reward's k per term, e.g. {"pos": 400};
             keys pos, rot, vel, ang_vel, each in (0, 10000]; a missing key keeps PHC's default.
+          reference_frames: tracking only (no loop_clips, no anchor_reference): how many
+            upcoming reference frames each body observes, in [1, 8]; 0: 1. Each adds 24 features
+            per body (``spec.reference_frames`` blocks after a body's self features).
 
         Use it as a context manager (or call ``close()``) so that the server frees the envs.
         """
@@ -449,7 +452,8 @@ class Client:
                                   reward_parts=[reward_parts] if isinstance(reward_parts, str) else list(reward_parts),
                                   reward_relative_to_root=bool(reward_relative_to_root),
                                   anchor_reference=bool(anchor_reference),
-                                  anchor_position_only=bool(anchor_position_only))
+                                  anchor_position_only=bool(anchor_position_only),
+                                  reference_frames=int(reference_frames))
         if energy_weight is not None:
             config.energy_weight = float(energy_weight)
         if imitation_kernels:

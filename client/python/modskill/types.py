@@ -105,6 +105,9 @@ class EnvSpec:
     family_parameters: Dict[str, Tuple[str, str]] = dataclasses.field(default_factory=dict, compare=False)
     family: Dict[str, Tuple[float, float]] = dataclasses.field(default_factory=dict)
     time_warp_action: int = -1
+    # Tracking: the upcoming reference frames each body observes (SessionConfig.reference_frames);
+    # its task features are that many blocks of 24 after its self features, the next frame's first.
+    reference_frames: int = 1
 
     @classmethod
     def from_proto(cls, spec: pb.EnvSpec) -> "EnvSpec":
@@ -143,6 +146,7 @@ class EnvSpec:
             family_parameters={p.name: (p.unit, p.description) for p in spec.family_parameters},
             family={r.name: (r.lo, r.hi) for r in spec.family},
             time_warp_action=spec.time_warp_action if spec.family else -1,
+            reference_frames=max(1, spec.reference_frames),  # 0 from a server older than the field
         )
 
     @property

@@ -5,6 +5,7 @@
 
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
+#include "common/policy/reference_frames.h"
 #include "server/core/env/task_catalog.h"
 #include "server/core/sim/mjcf_builder.h"
 #include "server/core/util/seed_mixing.h"
@@ -121,6 +122,13 @@ absl::StatusOr<std::unique_ptr<EnvBatch>> EnvBatch::Create(const EnvBatchConfig&
   if (absl::Status status = ValidateTerminationDistance(config.env.termination_distance); !status.ok()) return status;
   if (absl::Status status = config.env.action.Validate(); !status.ok()) return status;
   if (absl::Status status = config.env.task_settings.Validate(); !status.ok()) return status;
+  if (absl::Status status = ValidateReferenceFrames(config.env.reference_frames, "reference_frames"); !status.ok()) {
+    return status;
+  }
+  if (config.env.reference_frames > 1 && (config.env.task != TaskKind::kTracking || config.env.loop_clips ||
+                                          config.env.anchor_reference || !config.env.family.empty())) {
+    return absl::InvalidArgumentError("reference_frames: above 1 in plain tracking only");
+  }
   for (int c = 0; c < motions->size(); ++c) {
     if (motions->clip(c).num_bodies != humanoid->num_bodies()) {
       return absl::InvalidArgumentError(absl::StrCat("motions: clip '", motions->clip(c).name, "' has ",
@@ -134,7 +142,7 @@ absl::StatusOr<std::unique_ptr<EnvBatch>> EnvBatch::Create(const EnvBatchConfig&
   batch->context_.humanoid = *std::move(task_model);
   batch->context_.motions = std::move(motions);
   batch->context_.config = config.env;
-  EnvSpec spec = MakeEnvSpec(*batch->context_.humanoid, layout, config.env.task);
+  EnvSpec spec = MakeEnvSpec(*batch->context_.humanoid, layout, config.env.task, config.env.reference_frames);
   if (!config.env.family.empty()) {
     if (absl::Status status = SetUpFamily(batch->context_, &spec); !status.ok()) return status;
   }

@@ -7,7 +7,7 @@ const char* RewardTermName(int term) {
   return term >= 0 && term < kNumRewardTerms ? kNames[term] : "unknown";
 }
 
-EnvSpec MakeEnvSpec(const HumanoidModel& humanoid, const PartLayout& layout, TaskKind task) {
+EnvSpec MakeEnvSpec(const HumanoidModel& humanoid, const PartLayout& layout, TaskKind task, int reference_frames) {
   const HumanoidSpec& spec = humanoid.spec();
   EnvSpec env;
   env.layout = layout;
@@ -18,7 +18,9 @@ EnvSpec MakeEnvSpec(const HumanoidModel& humanoid, const PartLayout& layout, Tas
   // tasks, whose reference is their base motion anchored to the character
   // (base_motion_anchor.h). VR tracking has only its three bodies' features, in the goal. Task
   // envs append the goal after every body's features.
-  const int per_body_task = task == TaskKind::kTracking || IsGoalTask(task) ? kTaskFeaturesPerBody : 0;
+  env.reference_frames = task == TaskKind::kTracking ? reference_frames : 1;
+  const int per_body_task =
+      task == TaskKind::kTracking || IsGoalTask(task) ? kTaskFeaturesPerBody * env.reference_frames : 0;
   env.body_order = layout.BodyOrder();
   env.body_obs_start.assign(spec.num_bodies(), 0);
   const std::vector<std::string> hinge_names = spec.HingeNames();

@@ -25,6 +25,8 @@ struct Slice {
 // The goal tasks (steer, reach, strike) write the same 934 (their reference: the base motion
 // anchored to the character, base_motion_anchor.h) and then the goal: [934 | goal]. VR tracking
 // writes the self features only, body by body in the same order, then its goal: [358 | 72].
+// A tracker that observes N upcoming reference frames (EnvSpec::reference_frames) has N task
+// blocks per body, the next frame's first: [self | task(t+1) | ... | task(t+N)].
 inline constexpr int kSelfFeaturesPerBody = 15;
 inline constexpr int kSelfFeaturesRoot = 13;
 inline constexpr int kTaskFeaturesPerBody = 24;
@@ -54,6 +56,7 @@ struct EnvSpec {
   int self_obs_size = 0;
   int task_obs_size = 0;  // the reference features (tracking, goal tasks) and the goal
   int action_size = 0;
+  int reference_frames = 1;  // tracking: the task blocks per body (reference_frames.h)
   int amp_obs_per_frame = 0;
   int amp_obs_size = 0;  // kAmpHistory frames, newest first
   double control_dt = 0;
@@ -65,7 +68,9 @@ struct EnvSpec {
   int time_warp_action = -1;
 };
 
-EnvSpec MakeEnvSpec(const HumanoidModel& humanoid, const PartLayout& layout, TaskKind task = TaskKind::kTracking);
+// reference_frames above 1: tracking only (the session's validation refuses it elsewhere).
+EnvSpec MakeEnvSpec(const HumanoidModel& humanoid, const PartLayout& layout, TaskKind task = TaskKind::kTracking,
+                    int reference_frames = 1);
 
 }  // namespace modskill
 

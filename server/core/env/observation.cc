@@ -58,6 +58,15 @@ void WriteTrackingObservation(const EnvSpec& spec, const HumanoidState& sim, con
   }
 }
 
+void WriteUpcomingReferenceObservation(const EnvSpec& spec, const HumanoidState& sim, const HumanoidState& upcoming,
+                                       int k, float* out) {
+  const Quat to_heading = InverseHeadingRotation(sim.body_rot[0]);
+  for (int body : spec.body_order) {
+    const int self = body == 0 ? kSelfFeaturesRoot : kSelfFeaturesPerBody;
+    WriteTaskFeatures(sim, upcoming, body, to_heading, out + spec.body_obs_start[body] + self + k * kTaskFeaturesPerBody);
+  }
+}
+
 void WriteSelfObservation(const EnvSpec& spec, const HumanoidState& sim, float* out) {
   const Quat to_heading = InverseHeadingRotation(sim.body_rot[0]);
   for (int body : spec.body_order) WriteSelfFeatures(sim, body, to_heading, out + spec.body_obs_start[body]);

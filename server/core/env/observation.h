@@ -12,6 +12,12 @@ namespace modskill {
 // `sim` with `target` (the reference at the next control step).
 void WriteTrackingObservation(const EnvSpec& spec, const HumanoidState& sim, const HumanoidState& target, float* out);
 
+// A tracker observing several reference frames: writes every body's task block `k` (1 for the
+// frame after the next, ...; block 0 is WriteTrackingObservation's) comparing `sim` with
+// `upcoming`, the reference k control steps after the next one.
+void WriteUpcomingReferenceObservation(const EnvSpec& spec, const HumanoidState& sim, const HumanoidState& upcoming,
+                                       int k, float* out);
+
 // Task envs: writes every body's self features at its place in obs (spec.body_obs_start), the
 // same values WriteTrackingObservation writes there; the goal is the task's to write.
 void WriteSelfObservation(const EnvSpec& spec, const HumanoidState& sim, float* out);

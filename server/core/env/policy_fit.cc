@@ -14,6 +14,7 @@ PolicySpec PolicySpecForEnv(const EnvSpec& spec) {
   policy.joint_names = spec.joint_names;
   policy.control_dt = spec.control_dt;
   policy.task = TaskInfoOf(spec.task).name;
+  policy.reference_frames = spec.reference_frames;
   return policy;
 }
 
@@ -26,6 +27,10 @@ absl::Status CheckPolicyFitsEnv(const PolicySpec& policy, const EnvSpec& server,
     return absl::FailedPreconditionError(absl::StrCat("checkpoint: a policy for task ", policy.task, ", this env runs ",
                                                       env_task, " (a task policy runs in a session of its task: ",
                                                       "modskill-learner --eval --task ", policy.task, ")"));
+  }
+  // Before the sizes: a different count of reference frames is what an obs_size difference would mean.
+  if (policy.reference_frames != server.reference_frames) {
+    return mismatch("reference_frames", policy.reference_frames, server.reference_frames);
   }
   if (policy.part_layout != server.layout.name) return mismatch("part_layout", policy.part_layout, server.layout.name);
   if (policy.obs_size != server.obs_size) return mismatch("obs_size", policy.obs_size, server.obs_size);

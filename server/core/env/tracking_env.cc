@@ -21,6 +21,7 @@ TrackingEnv::TrackingEnv(const EnvContext* context, uint64_t seed)
   sim_.Resize(bodies, hinges);
   reference_.Resize(bodies, hinges);
   target_.Resize(bodies, hinges);
+  upcoming_.Resize(bodies, hinges);
   pd_targets_.assign(hinges, 0.0);
   body_distance_.assign(bodies, 0.0);
   amp_history_.assign(static_cast<size_t>(kAmpHistory) * context->spec->amp_obs_per_frame, 0.f);
@@ -334,6 +335,10 @@ void TrackingEnv::WriteObservation(EnvRow row) {
       }
     } else {
       WriteTrackingObservation(spec, sim_, target_, obs);
+      for (int k = 1; k < spec.reference_frames; ++k) {
+        ReadReferenceState(motion, std::min(next_frame + k, motion.num_frames - 1), &upcoming_);
+        WriteUpcomingReferenceObservation(spec, sim_, upcoming_, k, obs);
+      }
     }
   }
   // AMP rows are newest first.

@@ -60,6 +60,9 @@ struct TrackingEnvConfig {
   // With anchor_reference: the root's position only; the reference keeps the clip's own heading
   // (SessionConfig.anchor_position_only).
   bool anchor_position_only = false;
+  // Plain tracking (no loop, no anchor, no family): the upcoming reference frames each observation
+  // holds (SessionConfig.reference_frames); the ones past the clip's end repeat its last frame.
+  int reference_frames = 1;
   // A motor-skill family (family_episode.h): the session's parameter ranges; empty otherwise.
   std::vector<ParamRange> family;
   // false: an ended episode keeps its final state and later steps do nothing until the next
@@ -195,7 +198,7 @@ class TrackingEnv {
   bool finished_ = false;
   int64_t physics_resets_ = 0;
   // Preallocated scratch so that Step never allocates.
-  HumanoidState sim_, reference_, target_;
+  HumanoidState sim_, reference_, target_, upcoming_;
   std::vector<double> pd_targets_;
   std::vector<double> body_distance_;  // this step's per-body distance to the reference (m)
   std::vector<float> amp_history_;  // ring of kAmpHistory frames
