@@ -6,7 +6,6 @@
 
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
-#include "common/policy/reference_frames.h"
 #include "common/wire/policy_enums.h"
 #include "server/core/env/env_batch.h"
 #include "server/core/env/env_spec.h"
@@ -100,22 +99,6 @@ absl::Status CheckTrackingOnlyFields(const v1::SessionConfig& config, TaskKind t
     return absl::InvalidArgumentError("anchor_reference: not for a family session (its clip is tracked where it is)");
   }
   return absl::OkStatus();
-}
-
-absl::StatusOr<int> ToReferenceFrames(const v1::SessionConfig& config, TaskKind task) {
-  if (config.reference_frames() == 0) return 1;  // the default
-  if (absl::Status status = ValidateReferenceFrames(config.reference_frames(), "reference_frames"); !status.ok()) {
-    return status;
-  }
-  if (config.reference_frames() == 1) return 1;
-  const auto refuse = [&](absl::string_view why) {
-    return absl::InvalidArgumentError(absl::StrCat("reference_frames: ", config.reference_frames(), " ", why));
-  };
-  if (task != TaskKind::kTracking) return refuse(absl::StrCat("for task ", TaskInfoOf(task).name, "; tracking only"));
-  if (config.loop_clips()) return refuse("with loop_clips; only a clip tracked where it is");
-  if (config.anchor_reference()) return refuse("with anchor_reference; only a clip tracked where it is");
-  if (config.family().params_size() > 0) return refuse("in a family session; tracking only");
-  return config.reference_frames();
 }
 
 absl::Status ApplyImitationKernels(const v1::SessionConfig& config, TaskKind task, ImitationRewardConfig* reward) {
@@ -212,8 +195,6 @@ absl::StatusOr<SessionSettings> ParseSessionConfig(const v1::SessionConfig& conf
                                                    " has no imitation reward"));
   }
   if (absl::Status status = ApplyImitationKernels(config, *task, &settings.env.reward); !status.ok()) return status;
-  auto reference_frames = ToReferenceFrames(config, *task);
-  if (!reference_frames.ok()) return reference_frames.status();
   settings.amp_frames = config.amp_obs() == v1::NEWEST ? 1 : config.amp_obs() == v1::OMIT ? 0 : kAmpHistory;
   if (config.motions_size() > max_library_clips) {
     return absl::InvalidArgumentError(absl::StrCat("motions: ", config.motions_size(),
@@ -234,11 +215,12 @@ absl::StatusOr<SessionSettings> ParseSessionConfig(const v1::SessionConfig& conf
   settings.env.loop_clips = config.loop_clips();
   settings.env.anchor_reference = config.anchor_reference();
   settings.env.anchor_position_only = config.anchor_position_only();
-  settings.env.reference_frames = *reference_frames;
+  settings.env.reference_frames = config.reference_frames() == 0 ? 1 : config.reference_frames();  // 0: one
   settings.env.family = *std::move(family_ranges);
   settings.env.reward.bodies = *std::move(reward_bodies);
   settings.env.reward.relative_to_root = config.reward_relative_to_root();
   settings.env.reward.energy_coefficient = *energy_coefficient;
+  if (absl::Status status = CheckReferenceFrames(settings.env); !status.ok()) return status;
   // A family leaves its clip by design (a higher jump, another gravity): a loose default.
   if (family && config.termination_distance() == 0 && *termination == TerminationMode::kTraining) {
     settings.env.termination_distance = kFamilyDefaultTerminationDistance;

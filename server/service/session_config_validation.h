@@ -55,10 +55,6 @@ absl::StatusOr<double> ToEnergyCoefficient(const v1::SessionConfig& config, bool
 // loop_clips and anchor_reference in tracking only, anchor_reference not in a family session;
 // INVALID_ARGUMENT naming the field otherwise.
 absl::Status CheckTrackingOnlyFields(const v1::SessionConfig& config, TaskKind task);
-// SessionConfig.reference_frames: 0 reads as 1; INVALID_ARGUMENT naming the field for a count
-// outside [1, kMaxReferenceFrames] or above 1 outside plain tracking (a task, loop_clips,
-// anchor_reference, a family).
-absl::StatusOr<int> ToReferenceFrames(const v1::SessionConfig& config, TaskKind task);
 // SessionConfig.imitation_kernels into `reward` (a 0 field keeps its default); INVALID_ARGUMENT
 // naming imitation_kernels.<term> outside (0, 10000], or imitation_kernels for a goal task.
 absl::Status ApplyImitationKernels(const v1::SessionConfig& config, TaskKind task, ImitationRewardConfig* reward);

@@ -95,6 +95,21 @@ absl::Status EnvBatch::SetTerminationDistance(double distance) {
   return absl::OkStatus();
 }
 
+absl::Status CheckReferenceFrames(const TrackingEnvConfig& env) {
+  if (absl::Status status = ValidateReferenceFrames(env.reference_frames, "reference_frames"); !status.ok()) {
+    return status;
+  }
+  if (env.reference_frames == 1) return absl::OkStatus();
+  const auto refuse = [&](absl::string_view why) {
+    return absl::InvalidArgumentError(absl::StrCat("reference_frames: ", env.reference_frames, " ", why));
+  };
+  if (env.task != TaskKind::kTracking) return refuse(absl::StrCat("for task ", TaskInfoOf(env.task).name, "; tracking only"));
+  if (env.loop_clips) return refuse("with loop_clips; only a clip tracked where it is");
+  if (env.anchor_reference) return refuse("with anchor_reference; only a clip tracked where it is");
+  if (!env.family.empty()) return refuse("in a family session; tracking only");
+  return absl::OkStatus();
+}
+
 absl::StatusOr<std::unique_ptr<EnvBatch>> EnvBatch::Create(const EnvBatchConfig& config,
                                                            std::shared_ptr<const MotionLibrary> motions) {
   auto spec = HumanoidSpec::LoadDefault();
@@ -122,13 +137,7 @@ absl::StatusOr<std::unique_ptr<EnvBatch>> EnvBatch::Create(const EnvBatchConfig&
   if (absl::Status status = ValidateTerminationDistance(config.env.termination_distance); !status.ok()) return status;
   if (absl::Status status = config.env.action.Validate(); !status.ok()) return status;
   if (absl::Status status = config.env.task_settings.Validate(); !status.ok()) return status;
-  if (absl::Status status = ValidateReferenceFrames(config.env.reference_frames, "reference_frames"); !status.ok()) {
-    return status;
-  }
-  if (config.env.reference_frames > 1 && (config.env.task != TaskKind::kTracking || config.env.loop_clips ||
-                                          config.env.anchor_reference || !config.env.family.empty())) {
-    return absl::InvalidArgumentError("reference_frames: above 1 in plain tracking only");
-  }
+  if (absl::Status status = CheckReferenceFrames(config.env); !status.ok()) return status;
   for (int c = 0; c < motions->size(); ++c) {
     if (motions->clip(c).num_bodies != humanoid->num_bodies()) {
       return absl::InvalidArgumentError(absl::StrCat("motions: clip '", motions->clip(c).name, "' has ",

@@ -27,6 +27,12 @@ struct EnvBatchConfig {
   PhysicsOptions physics;
 };
 
+// The env's reference_frames: in [1, kMaxReferenceFrames], and above 1 in plain tracking only (no
+// task, loop_clips, anchor_reference or family); INVALID_ARGUMENT naming reference_frames and
+// what it meets otherwise. EnvBatch::Create checks it; session validation calls it for the
+// session's env.
+absl::Status CheckReferenceFrames(const TrackingEnvConfig& env);
+
 class EnvBatch {
  public:
   // Builds the humanoid from the default skeleton and `config.physics`, and the layout from

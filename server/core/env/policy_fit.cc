@@ -28,10 +28,6 @@ absl::Status CheckPolicyFitsEnv(const PolicySpec& policy, const EnvSpec& server,
                                                       env_task, " (a task policy runs in a session of its task: ",
                                                       "modskill-learner --eval --task ", policy.task, ")"));
   }
-  // Before the sizes: a different count of reference frames is what an obs_size difference would mean.
-  if (policy.reference_frames != server.reference_frames) {
-    return mismatch("reference_frames", policy.reference_frames, server.reference_frames);
-  }
   if (policy.part_layout != server.layout.name) return mismatch("part_layout", policy.part_layout, server.layout.name);
   if (policy.obs_size != server.obs_size) return mismatch("obs_size", policy.obs_size, server.obs_size);
   if (policy.action_size != server.action_size) return mismatch("action_size", policy.action_size, server.action_size);

@@ -14,10 +14,9 @@ namespace modskill {
 // controller input left at their defaults.
 PolicySpec PolicySpecForEnv(const EnvSpec& spec);
 
-// FAILED_PRECONDITION naming the first difference (task, reference frames, layout, sizes, control
-// step, joint order). `env_task` is the task the env runs (PolicySpec::task; Rollout runs
-// tracking); the task comes first, since a task policy's observation size differs from a
-// tracker's anyway.
+// FAILED_PRECONDITION naming the first difference (task, layout, sizes, control step, joint
+// order). `env_task` is the task the env runs (PolicySpec::task; Rollout runs tracking); the task
+// comes first, since a task policy's observation size differs from a tracker's anyway.
 absl::Status CheckPolicyFitsEnv(const PolicySpec& policy, const EnvSpec& server,
                                 absl::string_view env_task = kTrackingTask);
 

@@ -96,7 +96,7 @@ absl::StatusOr<std::unique_ptr<EnvBatch>> RolloutBatch(std::shared_ptr<const Hum
   config.env.termination = options.termination;
   config.env.termination_distance = options.termination_distance;
   config.env.action = options.action;
-  config.env.reference_frames = options.task == TaskKind::kTracking ? options.reference_frames : 1;
+  config.env.reference_frames = options.reference_frames;
   config.env.max_episode_steps = options.max_steps_per_clip;
   config.env.auto_reset = false;
   config.env.task = options.task;

@@ -20,7 +20,7 @@ struct RolloutOptions {
   TerminationMode termination = TerminationMode::kEvaluation;
   double termination_distance = 0.5;  // m
   ActionMapping action;               // the one the policy was trained with
-  int reference_frames = 1;           // tracking: the upcoming reference frames it observes
+  int reference_frames = 1;           // tracking: the upcoming reference frames it observes (else 1)
   int max_steps_per_clip = 0;         // 0: the clip's length (goal tasks: TaskEpisodeSteps)
   int num_threads = 1;
   PhysicsOptions physics;
