@@ -19,10 +19,8 @@ train_side_by_side() {
   local server_flags="$1"; shift
   # Side by side, each learner updates on one thread: two learners with two OpenMP threads each on
   # two cores spin against each other (measured: 8 s updates instead of 1.2 s).
-  # Likewise each server steps its envs on one thread; a variant alone has both cores for its
-  # server (measured on the walk: collection 2.9 s per 8,192 steps on one thread, 2.3 s on two).
-  local shared="" server_threads=2
-  ((${#VARIANTS[@]} > 1)) && shared="--update_threads 1" server_threads=1
+  local shared=""
+  ((${#VARIANTS[@]} > 1)) && shared="--update_threads 1"
   local pids=() variant name flags port
   for variant in "${VARIANTS[@]}"; do
     name="${variant%%=*}" flags="${variant#*=}"
@@ -30,7 +28,7 @@ train_side_by_side() {
     local own_server_flags=""
     if declare -p SERVER_FLAGS_FOR > /dev/null 2>&1; then own_server_flags="${SERVER_FLAGS_FOR[$name]:-}"; fi
     # shellcheck disable=SC2086  # the flags are words on purpose
-    "$BUILD/server/modskill-server" --port "$port" --threads "$server_threads" $server_flags $own_server_flags \
+    "$BUILD/server/modskill-server" --port "$port" --threads 1 $server_flags $own_server_flags \
         > "$OUT/$name.server.log" 2>&1 &
     SERVERS+=($!)
     NAMES+=("$name") FLAGS+=("$flags") PORTS+=("$port")
