@@ -145,56 +145,84 @@ absl::Status Trainer::RestoreState(const std::string& bytes, const std::string& 
   return archive.ok() ? RestoreState(**archive, origin) : archive.status();
 }
 
+// Whether the checkpoint was trained by a run like this one: its world size, task, reference
+// frames, sizes, widths and action mapping.
+absl::Status Trainer::CheckCheckpointMatchesRun(torch::serialize::InputArchive& archive, const std::string& path) {
+  // Each data-parallel rank's batch is a share of the step's: a run resumes with its world size
+  // (checkpoints from before data-parallel runs had one learner).
+  torch::Tensor world_size = torch::tensor(int64_t{1});
+  archive.try_read("world_size", world_size);
+  if (world_size.item<int64_t>() != config_.data_parallel.world_size) {
+    return absl::FailedPreconditionError(absl::StrCat(path, ": trained with --world_size ", world_size.item<int64_t>(),
+                                                      "; resume with --world_size ", world_size.item<int64_t>(),
+                                                      ", not ", config_.data_parallel.world_size));
+  }
+  // Checkpoints from before tasks were trackers.
+  c10::IValue stored_task{std::string(kTrackingTask)};
+  archive.try_read("task", stored_task);
+  const std::string task = stored_task.isString() ? stored_task.toStringRef() : "?";
+  if (task != layout_.task) {
+    return absl::FailedPreconditionError(
+        absl::StrCat(path, ": trained for task ", task, "; resume with --task ", task));
+  }
+  // Before the obs size, which a different count of reference frames changes (checkpoints from
+  // before the flag observed one).
+  torch::Tensor reference_frames = torch::tensor(int64_t{1});
+  archive.try_read("reference_frames", reference_frames);
+  if (reference_frames.item<int64_t>() != config_.reference_frames) {
+    return absl::FailedPreconditionError(absl::StrCat(
+        path, ": trained with --reference_frames ", reference_frames.item<int64_t>(), "; resume with --reference_frames ",
+        reference_frames.item<int64_t>(), ", not ", config_.reference_frames));
+  }
+  torch::Tensor obs_size, action_size, amp_obs_size;
+  archive.read("obs_size", obs_size);
+  archive.read("action_size", action_size);
+  archive.read("amp_obs_size", amp_obs_size);
+  if (obs_size.item<int64_t>() != layout_.obs_size || action_size.item<int64_t>() != layout_.action_size ||
+      amp_obs_size.item<int64_t>() != layout_.amp_obs_size) {
+    return absl::FailedPreconditionError(
+        absl::StrCat(path, ": trained with obs ", obs_size.item<int64_t>(), ", actions ", action_size.item<int64_t>(),
+                     ", AMP obs ", amp_obs_size.item<int64_t>(), "; the server has ", layout_.obs_size, ", ",
+                     layout_.action_size, ", and --amp_frames ", config_.model.amp_frames, " reads ",
+                     layout_.amp_obs_size, " AMP floats"));
+  }
+  if (absl::Status status = CheckStoredWidths(archive, config_.model, path); !status.ok()) return status;
+  if (absl::Status status = CheckStoredActionMode(archive, ActionModeOf(config_), config_.residual_scale, path);
+      !status.ok()) {
+    return status;
+  }
+  return absl::OkStatus();
+}
+
+absl::Status Trainer::RestoreCriticLearningRate(torch::serialize::InputArchive& archive, const std::string& path) {
+  // The critic rate decides the optimizer's groups (two when > 0); checkpoints from before
+  // --critic_learning_rate have none: one shared group. A resume without the flag goes on at the
+  // checkpoint's rate; data-parallel ranks, which must agree on their optimizers, take it only
+  // from the flag.
+  torch::Tensor critic_rate = torch::tensor(0.0, torch::kFloat64);
+  archive.try_read("critic_learning_rate", critic_rate);
+  const double stored_rate = critic_rate.item<double>();
+  if (!config_.critic_learning_rate_given && !data_parallel_ && stored_rate != config_.critic_learning_rate) {
+    LogLine("%s: the critic was trained at --critic_learning_rate %g; resuming with it", path, stored_rate);
+    config_.critic_learning_rate = stored_rate;
+    BuildPolicyOptimizer();
+  }
+  if ((stored_rate > 0) != (config_.critic_learning_rate > 0)) {
+    return absl::FailedPreconditionError(absl::StrCat(
+        path, ": its optimizer has ", stored_rate > 0 ? 2 : 1, " parameter group(s), trained at --critic_learning_rate ",
+        stored_rate, " (0: the critic shared --learning_rate); resume it with that value"));
+  }
+  return absl::OkStatus();
+}
+
 absl::Status Trainer::RestoreState(torch::serialize::InputArchive& archive, const std::string& path) {
   try {
-    // Each data-parallel rank's batch is a share of the step's: a run resumes with its world size
-    // (checkpoints from before data-parallel runs had one learner).
-    torch::Tensor world_size = torch::tensor(int64_t{1});
-    archive.try_read("world_size", world_size);
-    if (world_size.item<int64_t>() != config_.data_parallel.world_size) {
-      return absl::FailedPreconditionError(absl::StrCat(path, ": trained with --world_size ", world_size.item<int64_t>(),
-                                                        "; resume with --world_size ", world_size.item<int64_t>(),
-                                                        ", not ", config_.data_parallel.world_size));
-    }
-    // Checkpoints from before tasks were trackers.
-    c10::IValue stored_task{std::string(kTrackingTask)};
-    archive.try_read("task", stored_task);
-    const std::string task = stored_task.isString() ? stored_task.toStringRef() : "?";
-    if (task != layout_.task) {
-      return absl::FailedPreconditionError(
-          absl::StrCat(path, ": trained for task ", task, "; resume with --task ", task));
-    }
-    // Before the obs size, which a different count of reference frames changes (checkpoints from
-    // before the flag observed one).
-    torch::Tensor reference_frames = torch::tensor(int64_t{1});
-    archive.try_read("reference_frames", reference_frames);
-    if (reference_frames.item<int64_t>() != config_.reference_frames) {
-      return absl::FailedPreconditionError(absl::StrCat(
-          path, ": trained with --reference_frames ", reference_frames.item<int64_t>(), "; resume with --reference_frames ",
-          reference_frames.item<int64_t>(), ", not ", config_.reference_frames));
-    }
-    torch::Tensor obs_size, action_size, amp_obs_size, iteration, env_steps;
-    archive.read("obs_size", obs_size);
-    archive.read("action_size", action_size);
-    archive.read("amp_obs_size", amp_obs_size);
-    if (obs_size.item<int64_t>() != layout_.obs_size || action_size.item<int64_t>() != layout_.action_size ||
-        amp_obs_size.item<int64_t>() != layout_.amp_obs_size) {
-      return absl::FailedPreconditionError(
-          absl::StrCat(path, ": trained with obs ", obs_size.item<int64_t>(), ", actions ", action_size.item<int64_t>(),
-                       ", AMP obs ", amp_obs_size.item<int64_t>(), "; the server has ", layout_.obs_size, ", ",
-                       layout_.action_size, ", and --amp_frames ", config_.model.amp_frames, " reads ",
-                       layout_.amp_obs_size, " AMP floats"));
-    }
-    if (absl::Status status = CheckStoredWidths(archive, config_.model, path); !status.ok()) return status;
+    if (absl::Status status = CheckCheckpointMatchesRun(archive, path); !status.ok()) return status;
     auto load_module = [&](const char* key, torch::nn::Module& module) {
       torch::serialize::InputArchive sub;
       archive.read(key, sub);
       module.load(sub);
     };
-    if (absl::Status status = CheckStoredActionMode(archive, ActionModeOf(config_), config_.residual_scale, path);
-        !status.ok()) {
-      return status;
-    }
     load_module("policy", *policy_);
     load_module("critic", *critic_);
     if (critic_->normalizes_returns() != config_.normalize_value) {
@@ -206,28 +234,13 @@ absl::Status Trainer::RestoreState(torch::serialize::InputArchive& archive, cons
     load_module("discriminator", *discriminator_);
     load_module("obs_norm", *obs_norm_);
     load_module("amp_norm", *amp_norm_);
-    // The critic rate decides the optimizer's groups (two when > 0); checkpoints from before
-    // --critic_learning_rate have none: one shared group. A resume without the flag goes on at the
-    // checkpoint's rate; data-parallel ranks, which must agree on their optimizers, take it only
-    // from the flag.
-    torch::Tensor critic_rate = torch::tensor(0.0, torch::kFloat64);
-    archive.try_read("critic_learning_rate", critic_rate);
-    const double stored_rate = critic_rate.item<double>();
-    if (!config_.critic_learning_rate_given && !data_parallel_ && stored_rate != config_.critic_learning_rate) {
-      LogLine("%s: the critic was trained at --critic_learning_rate %g; resuming with it", path, stored_rate);
-      config_.critic_learning_rate = stored_rate;
-      BuildPolicyOptimizer();
-    }
-    if ((stored_rate > 0) != (config_.critic_learning_rate > 0)) {
-      return absl::FailedPreconditionError(absl::StrCat(
-          path, ": its optimizer has ", stored_rate > 0 ? 2 : 1, " parameter group(s), trained at --critic_learning_rate ",
-          stored_rate, " (0: the critic shared --learning_rate); resume it with that value"));
-    }
+    if (absl::Status status = RestoreCriticLearningRate(archive, path); !status.ok()) return status;
     torch::serialize::InputArchive optimizer, discriminator_optimizer;
     archive.read("optimizer", optimizer);
     archive.read("discriminator_optimizer", discriminator_optimizer);
     optimizer_->load(optimizer);
     discriminator_optimizer_->load(discriminator_optimizer);
+    torch::Tensor iteration, env_steps;
     archive.read("iteration", iteration);
     archive.read("env_steps", env_steps);
     torch::Tensor termination_distance;

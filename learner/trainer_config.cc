@@ -297,6 +297,31 @@ TerminationBodies TerminationBodiesOf(const TrainerConfig& config) {
   return ParseTerminationBodies(config.termination_bodies).value_or(TerminationBodies::kAll);
 }
 
+namespace {
+
+// A task run's part of config.json: its skills, head and goal settings.
+void AddTaskSettings(const TrainerConfig& config, nlohmann::json& json) {
+  json["skills"] = config.skills;
+  json["task_hidden"] = config.model.task_hidden;
+  json["task_log_std"] = config.model.task_log_std;
+  json["task_skill_prior"] = config.model.task_skill_prior;
+  if (!config.task_parts.empty()) json["task_parts"] = config.task_parts;
+  if (!config.task_teacher.empty()) {
+    json["task_teacher"] = config.task_teacher;
+    json["task_teacher_weight"] = config.task_teacher_weight;
+    json["task_teacher_steps"] = config.task_teacher_steps;
+  }
+  json["task_settings"] = {{"min_speed", config.task_min_speed},
+                           {"max_speed", config.task_max_speed},
+                           {"min_goal_interval_s", config.task_min_goal_interval_s},
+                           {"max_goal_interval_s", config.task_max_goal_interval_s}};
+  if (config.task_reach_box_size > 0) json["task_settings"]["reach_box_size"] = config.task_reach_box_size;
+  if (!config.task_reach_center.empty()) json["task_settings"]["reach_center"] = config.task_reach_center;
+  if (config.task_steering_rate > 0) json["task_settings"]["steering_rate"] = config.task_steering_rate;
+}
+
+}  // namespace
+
 std::string TrainerConfig::ToJson() const {
   nlohmann::json json;
   json["servers"] = servers;
@@ -354,25 +379,7 @@ std::string TrainerConfig::ToJson() const {
   }
   if (!reward_parts.empty()) json["reward_parts"] = reward_parts;
   if (reward_relative_to_root) json["reward_relative_to_root"] = true;
-  if (!IsTrackingTask(task)) {
-    json["skills"] = skills;
-    json["task_hidden"] = model.task_hidden;
-    json["task_log_std"] = model.task_log_std;
-    json["task_skill_prior"] = model.task_skill_prior;
-    if (!task_parts.empty()) json["task_parts"] = task_parts;
-    if (!task_teacher.empty()) {
-      json["task_teacher"] = task_teacher;
-      json["task_teacher_weight"] = task_teacher_weight;
-      json["task_teacher_steps"] = task_teacher_steps;
-    }
-    json["task_settings"] = {{"min_speed", task_min_speed},
-                             {"max_speed", task_max_speed},
-                             {"min_goal_interval_s", task_min_goal_interval_s},
-                             {"max_goal_interval_s", task_max_goal_interval_s}};
-    if (task_reach_box_size > 0) json["task_settings"]["reach_box_size"] = task_reach_box_size;
-    if (!task_reach_center.empty()) json["task_settings"]["reach_center"] = task_reach_center;
-    if (task_steering_rate > 0) json["task_settings"]["steering_rate"] = task_steering_rate;
-  }
+  if (!IsTrackingTask(task)) AddTaskSettings(*this, json);
   if (data_parallel.world_size > 1) {
     json["world_size"] = data_parallel.world_size;
     json["rendezvous"] = data_parallel.rendezvous;

@@ -244,6 +244,62 @@ int RunCommand(SimulationClient& client, const std::string& command, const std::
   return cli::Simulate(client, options);
 }
 
+// What is wrong with the command line of `command` (its operands and flags), or "" when nothing is.
+std::string CommandLineError(const std::string& command, const std::vector<std::string>& operands,
+                             const RepeatedFlags& repeated) {
+  static const char* const kCommands[] = {"describe", "motions", "stats", "add-motions", "rollout", "simulate",
+                                          "skills", "compose", "family"};
+  if (std::find(std::begin(kCommands), std::end(kCommands), command) == std::end(kCommands)) {
+    return absl::StrCat("unknown command '", command, "'");
+  }
+  if (command == "add-motions") {
+    if (operands.empty()) return "add-motions: give at least one FILE";
+  } else if (!operands.empty()) {
+    return absl::StrCat(command, ": unexpected argument '", operands[0], "'");
+  }
+  const double timeout = absl::GetFlag(FLAGS_timeout_s);
+  if (!(timeout > 0) || timeout > 86400) return "--timeout_s must be in (0, 86400]";
+  // gRPC would quietly use port 443 for a bare host name.
+  if (absl::GetFlag(FLAGS_server).find(':') == std::string::npos) {
+    return absl::StrCat("--server: '", absl::GetFlag(FLAGS_server), "' has no port; give host:port");
+  }
+  if (command == "rollout") {
+    if (absl::GetFlag(FLAGS_checkpoint).empty()) return "rollout: --checkpoint is required";
+    if (absl::GetFlag(FLAGS_frames) && absl::GetFlag(FLAGS_out).empty()) {
+      return "rollout: --frames needs --out (frames go to the JSON file)";
+    }
+  }
+  if (command == "family") {
+    if (absl::GetFlag(FLAGS_checkpoint).empty()) return "family: --checkpoint is required";
+    if (absl::GetFlag(FLAGS_nearest_elites) < 0 || absl::GetFlag(FLAGS_nearest_elites) > 64) {
+      return "--nearest_elites must be in [0, 64]";
+    }
+  }
+  if (!repeated.params.empty() && command != "rollout" && command != "family") {
+    return absl::StrCat(command, ": --param applies to rollout and family only");
+  }
+  if (command == "skills" || command == "compose") {
+    if (absl::GetFlag(FLAGS_checkpoint).empty()) return command + ": --checkpoint is required";
+    if (absl::GetFlag(FLAGS_out).empty()) return command + ": --out DIR is required";
+    if (absl::GetFlag(FLAGS_max_steps) < 0) return "--max_steps must be >= 0";
+  }
+  if (command == "compose") {
+    if (absl::GetFlag(FLAGS_base).empty() || absl::GetFlag(FLAGS_source).empty()) {
+      return "compose: --base and --source are required";
+    }
+    if (absl::GetFlag(FLAGS_parts).empty()) return "compose: --parts is required (e.g. --parts R_Arm,L_Arm)";
+  }
+  if (command == "simulate") {
+    if (absl::GetFlag(FLAGS_envs) < 1) return "--envs must be >= 1";
+    if (absl::GetFlag(FLAGS_steps) < 1) return "--steps must be >= 1";
+    const std::string actions = absl::GetFlag(FLAGS_actions);
+    if (actions != "zero" && actions != "random") {
+      return absl::StrCat("--actions must be zero or random, not '", actions, "'");
+    }
+  }
+  return "";
+}
+
 int Main(int argc, char** argv) {
   absl::SetProgramUsageMessage(kUsage);
   // --help lists this file's flags (absl's default looks for <program name>.cc).
@@ -268,56 +324,7 @@ int Main(int argc, char** argv) {
   const std::string command = args[1];
   const std::vector<std::string> operands(args.begin() + 2, args.end());
 
-  static const char* const kCommands[] = {"describe", "motions", "stats", "add-motions", "rollout", "simulate",
-                                          "skills", "compose", "family"};
-  if (std::find(std::begin(kCommands), std::end(kCommands), command) == std::end(kCommands)) {
-    return Usage(absl::StrCat("unknown command '", command, "'"));
-  }
-  if (command == "add-motions") {
-    if (operands.empty()) return Usage("add-motions: give at least one FILE");
-  } else if (!operands.empty()) {
-    return Usage(absl::StrCat(command, ": unexpected argument '", operands[0], "'"));
-  }
-  const double timeout = absl::GetFlag(FLAGS_timeout_s);
-  if (!(timeout > 0) || timeout > 86400) return Usage("--timeout_s must be in (0, 86400]");
-  // gRPC would quietly use port 443 for a bare host name.
-  if (absl::GetFlag(FLAGS_server).find(':') == std::string::npos) {
-    return Usage(absl::StrCat("--server: '", absl::GetFlag(FLAGS_server), "' has no port; give host:port"));
-  }
-  if (command == "rollout") {
-    if (absl::GetFlag(FLAGS_checkpoint).empty()) return Usage("rollout: --checkpoint is required");
-    if (absl::GetFlag(FLAGS_frames) && absl::GetFlag(FLAGS_out).empty()) {
-      return Usage("rollout: --frames needs --out (frames go to the JSON file)");
-    }
-  }
-  if (command == "family") {
-    if (absl::GetFlag(FLAGS_checkpoint).empty()) return Usage("family: --checkpoint is required");
-    if (absl::GetFlag(FLAGS_nearest_elites) < 0 || absl::GetFlag(FLAGS_nearest_elites) > 64) {
-      return Usage("--nearest_elites must be in [0, 64]");
-    }
-  }
-  if (!repeated.params.empty() && command != "rollout" && command != "family") {
-    return Usage(absl::StrCat(command, ": --param applies to rollout and family only"));
-  }
-  if (command == "skills" || command == "compose") {
-    if (absl::GetFlag(FLAGS_checkpoint).empty()) return Usage(command + ": --checkpoint is required");
-    if (absl::GetFlag(FLAGS_out).empty()) return Usage(command + ": --out DIR is required");
-    if (absl::GetFlag(FLAGS_max_steps) < 0) return Usage("--max_steps must be >= 0");
-  }
-  if (command == "compose") {
-    if (absl::GetFlag(FLAGS_base).empty() || absl::GetFlag(FLAGS_source).empty()) {
-      return Usage("compose: --base and --source are required");
-    }
-    if (absl::GetFlag(FLAGS_parts).empty()) return Usage("compose: --parts is required (e.g. --parts R_Arm,L_Arm)");
-  }
-  if (command == "simulate") {
-    if (absl::GetFlag(FLAGS_envs) < 1) return Usage("--envs must be >= 1");
-    if (absl::GetFlag(FLAGS_steps) < 1) return Usage("--steps must be >= 1");
-    const std::string actions = absl::GetFlag(FLAGS_actions);
-    if (actions != "zero" && actions != "random") {
-      return Usage(absl::StrCat("--actions must be zero or random, not '", actions, "'"));
-    }
-  }
+  if (std::string error = CommandLineError(command, operands, repeated); !error.empty()) return Usage(error);
 
   auto client = Connect();
   if (!client.ok()) {

@@ -74,6 +74,23 @@ absl::Status ReadFamily(const nlohmann::json& json, PolicySpec* spec) {
   return absl::OkStatus();
 }
 
+// The upcoming reference frames a tracker observes (1 when the file predates the field).
+absl::Status ReadReferenceFrames(const nlohmann::json& json, PolicySpec* spec) {
+  if (!json.contains("reference_frames")) return absl::OkStatus();
+  if (!json.at("reference_frames").is_number_integer()) {
+    return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": reference_frames: ",
+                                                   ShownValue(json.at("reference_frames").dump()),
+                                                   " is not an integer"));
+  }
+  const int64_t frames = json.at("reference_frames").get<int64_t>();
+  if (frames < 1 || frames > kMaxReferenceFrames) {
+    return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": reference_frames: ", frames,
+                                                   " is not in [1, ", kMaxReferenceFrames, "]"));
+  }
+  spec->reference_frames = static_cast<int>(frames);
+  return absl::OkStatus();
+}
+
 }  // namespace
 
 absl::StatusOr<PolicySpec> PolicySpec::FromJson(absl::string_view text) {
@@ -136,19 +153,7 @@ absl::StatusOr<PolicySpec> PolicySpec::FromJson(absl::string_view text) {
                                                      ShownValue(spec.controller_input), " is not ",
                                                      kPartObsControllerInput, " or ", kProprioceptionControllerInput));
     }
-    if (json.contains("reference_frames")) {
-      if (!json.at("reference_frames").is_number_integer()) {
-        return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": reference_frames: ",
-                                                       ShownValue(json.at("reference_frames").dump()),
-                                                       " is not an integer"));
-      }
-      const int64_t frames = json.at("reference_frames").get<int64_t>();
-      if (frames < 1 || frames > kMaxReferenceFrames) {
-        return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": reference_frames: ", frames,
-                                                       " is not in [1, ", kMaxReferenceFrames, "]"));
-      }
-      spec.reference_frames = static_cast<int>(frames);
-    }
+    if (absl::Status status = ReadReferenceFrames(json, &spec); !status.ok()) return status;
     if (absl::Status status = ReadFamily(json, &spec); !status.ok()) return status;
     if (spec.reference_frames > 1 && (spec.task != kTrackingTask || spec.is_family())) {
       return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": reference_frames: ",

@@ -116,6 +116,16 @@ absl::StatusOr<std::unique_ptr<EnvBatch>> RolloutBatch(std::shared_ptr<const Hum
   return created;
 }
 
+// A family episode's measures: how the body moved, its fitness, how far along the clip it got.
+void AddFamilyMeasures(const FamilyMotionMeter& meter, double fitness, const TrackingEnv& env, const MotionClip& clip,
+                       ClipRolloutMetrics* m) {
+  m->has_family = true;
+  m->family = meter.measures();
+  m->fitness = fitness;
+  m->final_phase = env.family()->phase();
+  m->reached_end = m->final_phase >= clip.num_frames - 1;
+}
+
 }  // namespace
 
 absl::StatusOr<std::vector<ClipRolloutMetrics>> RunRollout(std::shared_ptr<const HumanoidModel> humanoid,
@@ -189,14 +199,7 @@ absl::StatusOr<std::vector<ClipRolloutMetrics>> RunRollout(std::shared_ptr<const
   for (int i = 0; i < n; ++i) {
     metrics.push_back(Measure(trajectories[i], motions->clip(clip_ids[i]).name, !terminated[i], layout));
     metrics.back().normalized_return = task_return[i] / PossibleSteps(options, motions->clip(clip_ids[i]));
-    if (family) {
-      ClipRolloutMetrics& m = metrics.back();
-      m.has_family = true;
-      m.family = meters[i].measures();
-      m.fitness = fitness[i];
-      m.final_phase = batch.env(i).family()->phase();
-      m.reached_end = m.final_phase >= motions->clip(clip_ids[i]).num_frames - 1;
-    }
+    if (family) AddFamilyMeasures(meters[i], fitness[i], batch.env(i), motions->clip(clip_ids[i]), &metrics.back());
   }
   return metrics;
 }
