@@ -89,6 +89,20 @@ absl::StatusOr<int64_t> CheckpointAmpObsSize(torch::serialize::InputArchive& che
 
 namespace {
 
+// A count the checkpoint stores under `key` (`fallback` when it predates the key) against the
+// run's --`key`.
+absl::Status CheckStoredCount(torch::serialize::InputArchive& archive, const char* key, int64_t fallback,
+                              int64_t expected, const std::string& path) {
+  torch::Tensor stored = torch::tensor(fallback);
+  archive.try_read(key, stored);
+  if (stored.item<int64_t>() != expected) {
+    return absl::FailedPreconditionError(absl::StrCat(path, ": trained with --", key, " ", stored.item<int64_t>(),
+                                                      "; resume with --", key, " ", stored.item<int64_t>(), ", not ",
+                                                      expected));
+  }
+  return absl::OkStatus();
+}
+
 // --action_mode and --residual_scale against the checkpoint's; checkpoints from before action
 // modes were trained in absolute mode.
 absl::Status CheckStoredActionMode(torch::serialize::InputArchive& archive, ActionMode mode, double scale,
@@ -150,12 +164,9 @@ absl::Status Trainer::RestoreState(const std::string& bytes, const std::string& 
 absl::Status Trainer::CheckCheckpointMatchesRun(torch::serialize::InputArchive& archive, const std::string& path) {
   // Each data-parallel rank's batch is a share of the step's: a run resumes with its world size
   // (checkpoints from before data-parallel runs had one learner).
-  torch::Tensor world_size = torch::tensor(int64_t{1});
-  archive.try_read("world_size", world_size);
-  if (world_size.item<int64_t>() != config_.data_parallel.world_size) {
-    return absl::FailedPreconditionError(absl::StrCat(path, ": trained with --world_size ", world_size.item<int64_t>(),
-                                                      "; resume with --world_size ", world_size.item<int64_t>(),
-                                                      ", not ", config_.data_parallel.world_size));
+  if (absl::Status status = CheckStoredCount(archive, "world_size", 1, config_.data_parallel.world_size, path);
+      !status.ok()) {
+    return status;
   }
   // Checkpoints from before tasks were trackers.
   c10::IValue stored_task{std::string(kTrackingTask)};
@@ -167,12 +178,9 @@ absl::Status Trainer::CheckCheckpointMatchesRun(torch::serialize::InputArchive& 
   }
   // Before the obs size, which a different count of reference frames changes (checkpoints from
   // before the flag observed one).
-  torch::Tensor reference_frames = torch::tensor(int64_t{1});
-  archive.try_read("reference_frames", reference_frames);
-  if (reference_frames.item<int64_t>() != config_.reference_frames) {
-    return absl::FailedPreconditionError(absl::StrCat(
-        path, ": trained with --reference_frames ", reference_frames.item<int64_t>(), "; resume with --reference_frames ",
-        reference_frames.item<int64_t>(), ", not ", config_.reference_frames));
+  if (absl::Status status = CheckStoredCount(archive, "reference_frames", 1, config_.reference_frames, path);
+      !status.ok()) {
+    return status;
   }
   torch::Tensor obs_size, action_size, amp_obs_size;
   archive.read("obs_size", obs_size);

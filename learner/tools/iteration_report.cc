@@ -98,7 +98,7 @@ void IterationReporter::Report(const IterationStats& s) {
 
 void IterationReporter::ExportMilestones(const IterationStats& s) {
   for (; next_milestone < milestones.size() && s.env_steps >= milestones[next_milestone]; ++next_milestone) {
-    const std::string path = absl::StrFormat("%s/policy_at_%gM.pt", config->run_dir, milestones[next_milestone] / 1e6);
+    const std::string path = absl::StrFormat("%s/policy_at_%gM.pt", trainer->config().run_dir, milestones[next_milestone] / 1e6);
     if (absl::Status exported = trainer->ExportPolicy(path); !exported.ok()) {
       LogLine("milestone policy %s not written: %s", path, exported.message());
     } else {

@@ -34,7 +34,6 @@ struct IterationReporter {
   Trainer* trainer;
   TensorBoardWriter* events;
   CsvLogger* csv;
-  const TrainerConfig* config;
   std::vector<int64_t> milestones;  // env steps, ascending
   std::atomic<bool>* stop;
   size_t next_milestone = 0;

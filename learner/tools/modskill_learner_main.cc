@@ -543,7 +543,7 @@ int RunTraining(const std::string& token) {
     csv = *std::move(opened_csv);
   }
 
-  IterationReporter reporter{trainer->get(), events.get(), csv.get(), &*config, *std::move(milestones), &g_stop};
+  IterationReporter reporter{trainer->get(), events.get(), csv.get(), *std::move(milestones), &g_stop};
   reporter.SkipPassedMilestones();
   reporter.start = absl::Now();
   reporter.budget_min = absl::GetFlag(FLAGS_time_budget_min);
