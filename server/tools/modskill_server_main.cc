@@ -40,6 +40,9 @@ ABSL_FLAG(std::string, pd_mode, "position_implicit",
 ABSL_FLAG(double, pd_gain_scale, 1.0,
           "multiplies every hinge's PD gains kp and kd (PHC's), in (0, 100]; a policy runs best at the gains it "
           "was trained with");
+ABSL_FLAG(int, substeps, 4,
+          "physics steps per 30 Hz control step, in [1, 100] (4: 120 Hz physics; 2: PHC's 60 Hz); a policy runs "
+          "best at the rate it was trained at");
 ABSL_FLAG(bool, damp_to_reference_rate, false,
           "residual PD targets lead the reference by kd/kp x its hinge rate, so the servos damp toward the "
           "reference's velocity instead of toward rest (not in motor-skill family sessions)");
@@ -115,6 +118,10 @@ absl::Status ReadNetworkAndCapacity(ServerOptions& options) {
   options.service.physics.pd_mode = *pd_mode;
   options.service.physics.pd_gain_scale = absl::GetFlag(FLAGS_pd_gain_scale);
   options.service.physics.damp_to_reference_rate = absl::GetFlag(FLAGS_damp_to_reference_rate);
+  options.service.physics.substeps = absl::GetFlag(FLAGS_substeps);
+  if (options.service.physics.substeps < 1 || options.service.physics.substeps > 100) {
+    return Invalid(absl::StrCat("--substeps: ", options.service.physics.substeps, " outside [1, 100]"));
+  }
   if (absl::Status status = ValidatePdGainScale(options.service.physics.pd_gain_scale, "--pd_gain_scale");
       !status.ok()) {
     return Invalid(std::string(status.message()));
@@ -174,12 +181,12 @@ absl::Status ReadAccess(ServiceOptions& service) {
 void LogListening(const ServerOptions& options, int port, int num_clips, const std::string& motion_dir) {
   const GenerationOptions& generation = options.service.generation;
   const PhysicsOptions& physics = options.service.physics;
-  LogLine("modskill-server listening on %s:%d (%s%s), %d clips from %s, %s PD at %g x PHC's gains%s, %d threads "
+  LogLine("modskill-server listening on %s:%d (%s%s), %d clips from %s, %s PD at %g x PHC's gains%s, %g Hz physics, %d threads "
           "per session, %s sampling (floor %g), generative resampling %s",
           options.bind, port, options.tls_cert_file.empty() ? "insecure" : "TLS",
           options.service.auth_token.empty() ? "" : ", token auth", num_clips, motion_dir,
           PdModeName(physics.pd_mode), physics.pd_gain_scale,
-          physics.damp_to_reference_rate ? " damped toward the reference's rate" : "",
+          physics.damp_to_reference_rate ? " damped toward the reference's rate" : "", 1.0 / physics.physics_dt(),
           options.service.threads_per_session, SamplingSchemeName(options.service.sampling),
           options.service.sampling_floor,
           !generation.enabled ? std::string("off")
