@@ -232,10 +232,12 @@ class Trainer {
   RunningMeanStd amp_norm_{nullptr};
   // Adam over the trainable policy and the critic: one group, or two with critic_learning_rate.
   void BuildPolicyOptimizer();
-  // RestoreState's parts: the refusal of a checkpoint another kind of run trained, and the critic's
-  // step size (the checkpoint's, unless --critic_learning_rate is given).
+  // RestoreState's parts: the refusal of a checkpoint another kind of run trained, the critic's
+  // step size (the checkpoint's, unless --critic_learning_rate is given), and the returns'
+  // discount and GAE lambda (the checkpoint's, unless --gamma / --lambda are given).
   absl::Status CheckCheckpointMatchesRun(torch::serialize::InputArchive& archive, const std::string& path);
   absl::Status RestoreCriticLearningRate(torch::serialize::InputArchive& archive, const std::string& path);
+  void RestoreReturnSettings(torch::serialize::InputArchive& archive, const std::string& path);
   std::unique_ptr<torch::optim::Adam> optimizer_;
   std::unique_ptr<torch::optim::Adam> discriminator_optimizer_;
   int iteration_ = 0;

@@ -39,6 +39,8 @@ absl::StatusOr<std::string> Trainer::SerializeState() {
     archive.write("optimizer", optimizer);
     archive.write("discriminator_optimizer", discriminator_optimizer);
     archive.write("critic_learning_rate", torch::tensor(config_.critic_learning_rate, torch::kFloat64));
+    archive.write("gamma", torch::tensor(config_.gamma, torch::kFloat64));
+    archive.write("lambda", torch::tensor(config_.lambda, torch::kFloat64));
     archive.write("iteration", torch::tensor(static_cast<int64_t>(iteration_)));
     archive.write("env_steps", torch::tensor(static_cast<int64_t>(env_steps_)));
     archive.write("obs_size", torch::tensor(layout_.obs_size));
@@ -154,6 +156,22 @@ absl::Status Trainer::LoadCheckpoint(const std::string& path) {
   return restored;
 }
 
+void Trainer::RestoreReturnSettings(torch::serialize::InputArchive& archive, const std::string& path) {
+  // A run's returns keep one discount across its parts: a resume that left out --gamma would
+  // otherwise switch a run trained at another value to the preset's. Data-parallel ranks, which
+  // must agree and of which rank 0 alone reads the checkpoint, take them only from the flags.
+  for (const auto& [key, given, value, fallback] :
+       {std::tuple{"gamma", config_.gamma_given, &config_.gamma, 0.99},
+        std::tuple{"lambda", config_.lambda_given, &config_.lambda, 0.95}}) {
+    torch::Tensor stored = torch::tensor(fallback, torch::kFloat64);
+    archive.try_read(key, stored);
+    if (!given && !data_parallel_ && stored.item<double>() != *value) {
+      LogLine("%s: the run was trained at --%s %g; resuming with it", path, key, stored.item<double>());
+      *value = stored.item<double>();
+    }
+  }
+}
+
 absl::Status Trainer::RestoreState(const std::string& bytes, const std::string& origin) {
   auto archive = LoadCheckpointArchive(bytes, origin);
   return archive.ok() ? RestoreState(**archive, origin) : archive.status();
@@ -243,6 +261,7 @@ absl::Status Trainer::RestoreState(torch::serialize::InputArchive& archive, cons
     load_module("obs_norm", *obs_norm_);
     load_module("amp_norm", *amp_norm_);
     if (absl::Status status = RestoreCriticLearningRate(archive, path); !status.ok()) return status;
+    RestoreReturnSettings(archive, path);
     torch::serialize::InputArchive optimizer, discriminator_optimizer;
     archive.read("optimizer", optimizer);
     archive.read("discriminator_optimizer", discriminator_optimizer);

@@ -465,6 +465,35 @@ TEST(LearnerTrainingTest, CriticLearningRateIsTheCriticsOwnStepSize) {
   server->Shutdown(absl::Seconds(1));
 }
 
+// --gamma and --lambda stay with a run: a resume without them goes on with the checkpoint's, a
+// resume with them takes the flags'.
+TEST(LearnerTrainingTest, ReturnSettingsStayWithTheRunAcrossAResume) {
+  auto server = StartTestServer();
+  TrainerConfig config = SmallConfig({server->port()}, RunDir("return_settings"));
+  config.iterations = 1;
+  config.gamma = 0.9, config.gamma_given = true;
+  config.lambda = 0.8, config.lambda_given = true;
+  auto trainer = Trainer::Create(config);
+  ASSERT_TRUE(trainer.ok()) << trainer.status();
+  ASSERT_TRUE((*trainer)->Run([](const IterationStats&) {}).ok());
+
+  config.resume = true;
+  config.gamma = 0.99, config.gamma_given = false;
+  config.lambda = 0.95, config.lambda_given = false;
+  auto resumed = Trainer::Create(config);
+  ASSERT_TRUE(resumed.ok()) << resumed.status();
+  ASSERT_TRUE((*resumed)->Run([](const IterationStats&) {}).ok());
+  EXPECT_DOUBLE_EQ((*resumed)->config().gamma, 0.9);
+  EXPECT_DOUBLE_EQ((*resumed)->config().lambda, 0.8);
+
+  config.gamma = 0.97, config.gamma_given = true;
+  auto changed = Trainer::Create(config);
+  ASSERT_TRUE(changed.ok()) << changed.status();
+  EXPECT_DOUBLE_EQ((*changed)->config().gamma, 0.97);
+  EXPECT_DOUBLE_EQ((*changed)->config().lambda, 0.8);
+  server->Shutdown(absl::Seconds(1));
+}
+
 class ServerFailoverTest : public ::testing::TestWithParam<bool> {};
 
 // Both collection modes: sequential, and collecting on its own thread during the update (where a

@@ -136,8 +136,10 @@ ABSL_FLAG(bool, task_baselines, false,
           "policy's mean z");
 ABSL_FLAG(int, eval_episodes, 32, "--eval --task: episodes per run (one per env)");
 ABSL_FLAG(int, horizon, 32, "steps per env per iteration");
-ABSL_FLAG(double, gamma, -1, "discount factor, in (0, 1] (-1: the preset's 0.99, PHC's; DeepMimic took 0.95)");
-ABSL_FLAG(double, lambda, -1, "GAE's lambda, in [0, 1] (-1: the preset's 0.95)");
+ABSL_FLAG(double, gamma, -1,
+          "discount factor, in (0, 1] (-1: the preset's: 0.95 for small's tracking runs, DeepMimic's; else 0.99, "
+          "PHC's; on --resume the run's)");
+ABSL_FLAG(double, lambda, -1, "GAE's lambda, in [0, 1] (-1: the preset's 0.95; on --resume the run's)");
 ABSL_FLAG(int, epochs, 0, "PPO epochs per iteration (0: the preset's)");
 ABSL_FLAG(int, minibatch_size, 0, "PPO minibatch (0: the preset's)");
 ABSL_FLAG(int, discriminator_epochs, 0, "AMP discriminator epochs per iteration (0: the preset's)");
@@ -465,8 +467,13 @@ absl::StatusOr<TrainerConfig> ConfigFromFlags(const std::string& token) {
     if (absl::Status status = HiddenSizesFromFlag(flag, values, sizes); !status.ok()) return status;
   }
   config->horizon = absl::GetFlag(FLAGS_horizon);
-  if (absl::GetFlag(FLAGS_gamma) != -1) config->gamma = absl::GetFlag(FLAGS_gamma);
-  if (absl::GetFlag(FLAGS_lambda) != -1) config->lambda = absl::GetFlag(FLAGS_lambda);
+  if (absl::GetFlag(FLAGS_gamma) != -1) {
+    config->gamma = absl::GetFlag(FLAGS_gamma);
+    config->gamma_given = true;
+  } else if (absl::GetFlag(FLAGS_preset) == "small" && IsTrackingTask(config->task)) {
+    config->gamma = kSmallTrackingGamma;
+  }
+  if (absl::GetFlag(FLAGS_lambda) != -1) config->lambda = absl::GetFlag(FLAGS_lambda), config->lambda_given = true;
   if (absl::GetFlag(FLAGS_epochs) > 0) config->epochs = absl::GetFlag(FLAGS_epochs);
   if (absl::GetFlag(FLAGS_discriminator_epochs) > 0) config->discriminator_epochs = absl::GetFlag(FLAGS_discriminator_epochs);
   if (const int frames = absl::GetFlag(FLAGS_amp_frames); frames != -1) {
