@@ -8,6 +8,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "absl/strings/str_cat.h"
+
 #include "server/core/env/humanoid_state.h"
 #include "server/core/sim/humanoid_model.h"
 #include "server/core/sim/pd_controller.h"
@@ -271,6 +273,26 @@ TEST(PdControllerTest, GainScaleStiffensEveryServo) {
     auto humanoid = HumanoidModel::Create(DefaultSpec(), options);
     ASSERT_FALSE(humanoid.ok()) << bad;
     EXPECT_NE(humanoid.status().message().find("pd_gain_scale"), std::string::npos) << humanoid.status();
+  }
+}
+
+// The physics rate is the control rate times the substeps; a count outside [1, 100] is refused
+// by name, whether it comes from the server's flag or from code.
+TEST(HumanoidModelTest, SubstepsOutsideTheirRangeAreRefused) {
+  for (int bad : {0, -1, 101}) {
+    PhysicsOptions options;
+    options.substeps = bad;
+    auto humanoid = HumanoidModel::Create(DefaultSpec(), options);
+    ASSERT_FALSE(humanoid.ok()) << bad;
+    EXPECT_EQ(humanoid.status().message(), absl::StrCat("substeps: ", bad, " outside [1, 100]"));
+  }
+  for (int good : {1, 100}) {
+    PhysicsOptions options;
+    options.substeps = good;
+    auto humanoid = HumanoidModel::Create(DefaultSpec(), options);
+    ASSERT_TRUE(humanoid.ok()) << humanoid.status();
+    // The MJCF carries the timestep to 8 decimals.
+    EXPECT_NEAR((*humanoid)->model()->opt.timestep, 1.0 / (30.0 * good), 5e-9);
   }
 }
 

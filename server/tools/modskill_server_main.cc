@@ -119,12 +119,10 @@ absl::Status ReadNetworkAndCapacity(ServerOptions& options) {
   options.service.physics.pd_gain_scale = absl::GetFlag(FLAGS_pd_gain_scale);
   options.service.physics.damp_to_reference_rate = absl::GetFlag(FLAGS_damp_to_reference_rate);
   options.service.physics.substeps = absl::GetFlag(FLAGS_substeps);
-  if (options.service.physics.substeps < 1 || options.service.physics.substeps > 100) {
-    return Invalid(absl::StrCat("--substeps: ", options.service.physics.substeps, " outside [1, 100]"));
-  }
-  if (absl::Status status = ValidatePdGainScale(options.service.physics.pd_gain_scale, "--pd_gain_scale");
-      !status.ok()) {
-    return Invalid(std::string(status.message()));
+  for (const absl::Status& status :
+       {ValidateSubsteps(options.service.physics.substeps, "--substeps"),
+        ValidatePdGainScale(options.service.physics.pd_gain_scale, "--pd_gain_scale")}) {
+    if (!status.ok()) return Invalid(std::string(status.message()));
   }
   return absl::OkStatus();
 }

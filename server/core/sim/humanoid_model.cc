@@ -17,9 +17,7 @@ absl::StatusOr<std::shared_ptr<const HumanoidModel>> HumanoidModel::Create(const
   if (!(options.control_hz > 0 && options.control_hz <= 1000)) {
     return absl::InvalidArgumentError(absl::StrCat("control_hz: ", options.control_hz, " outside (0, 1000]"));
   }
-  if (options.substeps < 1 || options.substeps > 100) {
-    return absl::InvalidArgumentError(absl::StrCat("substeps: ", options.substeps, " outside [1, 100]"));
-  }
+  if (absl::Status status = ValidateSubsteps(options.substeps, "substeps"); !status.ok()) return status;
   if (absl::Status status = ValidatePdGainScale(options.pd_gain_scale, "pd_gain_scale"); !status.ok()) return status;
   std::shared_ptr<HumanoidModel> humanoid(new HumanoidModel());
   humanoid->spec_ = spec;

@@ -29,4 +29,9 @@ absl::Status ValidatePdGainScale(double scale, absl::string_view what) {
   return absl::InvalidArgumentError(absl::StrCat(what, ": ", scale, " must be finite, in (0, 100]"));
 }
 
+absl::Status ValidateSubsteps(int substeps, absl::string_view what) {
+  if (substeps >= 1 && substeps <= 100) return absl::OkStatus();
+  return absl::InvalidArgumentError(absl::StrCat(what, ": ", substeps, " outside [1, 100]"));
+}
+
 }  // namespace modskill

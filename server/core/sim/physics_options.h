@@ -22,6 +22,8 @@ absl::string_view PdModeName(PdMode mode);
 absl::StatusOr<PdMode> ParsePdMode(absl::string_view name);
 // OK when `scale` is finite, in (0, 100]; otherwise an error naming `what` (a field or a flag).
 absl::Status ValidatePdGainScale(double scale, absl::string_view what);
+// OK when `substeps` (physics steps per control step) is in [1, 100]; otherwise an error naming `what`.
+absl::Status ValidateSubsteps(int substeps, absl::string_view what);
 
 struct PhysicsOptions {
   double control_hz = 30.0;
