@@ -29,6 +29,9 @@ void FuzzPolicySpec(const uint8_t* data, size_t size) {
   Check(spec->joint_names.size() <= static_cast<size_t>(kMaxPolicyVectorSize), "joint_names bounded");
   Check(spec->control_dt > 0 && spec->control_dt < 10, "control_dt in (0, 10)");
   Check(spec->action.Validate().ok(), "valid action mapping");
+  Check(!spec->physics.recorded() || (spec->physics.physics_dt <= 1 && spec->physics.pd_gain_scale > 0 &&
+                                      spec->physics.pd_gain_scale <= 100),
+        "recorded physics in bounds");
 
   auto again = PolicySpec::FromJson(spec->ToJson());
   Check(again.ok(), "ToJson output parses");
@@ -37,7 +40,10 @@ void FuzzPolicySpec(const uint8_t* data, size_t size) {
             again->control_dt == spec->control_dt && again->action.mode == spec->action.mode &&
             again->action.residual_scale == spec->action.residual_scale && again->task == spec->task &&
             again->controller_input == spec->controller_input && again->family_clip == spec->family_clip &&
-            again->family_frames == spec->family_frames && again->family.size() == spec->family.size(),
+            again->family_frames == spec->family_frames && again->family.size() == spec->family.size() &&
+            again->physics.physics_dt == spec->physics.physics_dt && again->physics.pd_mode == spec->physics.pd_mode &&
+            again->physics.pd_gain_scale == spec->physics.pd_gain_scale &&
+            again->physics.damp_to_reference_rate == spec->physics.damp_to_reference_rate,
         "ToJson -> FromJson is the identity");
   for (size_t k = 0; k < spec->family.size(); ++k) {
     Check(again->family[k].name == spec->family[k].name && again->family[k].lo == spec->family[k].lo &&

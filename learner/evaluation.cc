@@ -9,6 +9,7 @@
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
 #include "common/policy/policy_checkpoint.h"
+#include "common/wire/physics_wire.h"
 
 namespace modskill::learner {
 namespace {
@@ -174,6 +175,7 @@ PolicySpec PolicySpecOf(const v1::EnvSpec& spec, const ActionMapping& action) {
   policy.action_size = spec.action_size();
   policy.joint_names.assign(spec.joint_names().begin(), spec.joint_names().end());
   policy.control_dt = spec.control_dt();
+  policy.physics = PhysicsOf(spec);
   policy.action = action;
   if (!spec.task().empty()) policy.task = spec.task();
   // A server from before the field sends 0: it showed one frame.

@@ -1,11 +1,13 @@
 #include "learner/server_pool.h"
 
 #include <algorithm>
+#include <cmath>
 #include <set>
 
 #include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
 #include "common/log.h"
+#include "common/wire/physics_wire.h"
 
 namespace modskill::learner {
 
@@ -91,14 +93,31 @@ absl::Status ServerPool::Open(SessionSlot* slot, int64_t seed) {
   if (!have_spec_) {
     spec_ = spec;
     have_spec_ = true;
-  } else if (spec.obs_size() != spec_.obs_size() || spec.action_size() != spec_.action_size() ||
-             spec.amp_obs_per_frame() != spec_.amp_obs_per_frame() || spec.part_layout() != spec_.part_layout()) {
-    return absl::FailedPreconditionError(
-        absl::StrCat(slot->server, ": env spec differs from the other servers' (obs ", spec.obs_size(), " vs ",
-                     spec_.obs_size(), ", layout ", spec.part_layout(), " vs ", spec_.part_layout(), ")"));
+  } else if (absl::Status same = CheckSameEnv(slot->server, spec, spec_); !same.ok()) {
+    return same;
   }
   slot->stream = *std::move(stream);
   ++slot->generation;
+  return absl::OkStatus();
+}
+
+// One run's batch mixes every server's steps: they must be one env, down to the physics (a server
+// started with another --substeps or --pd_gain_scale would silently train another controller).
+absl::Status ServerPool::CheckSameEnv(const std::string& server, const v1::EnvSpec& spec, const v1::EnvSpec& first) {
+  if (spec.obs_size() != first.obs_size() || spec.action_size() != first.action_size() ||
+      spec.amp_obs_per_frame() != first.amp_obs_per_frame() || spec.part_layout() != first.part_layout()) {
+    return absl::FailedPreconditionError(
+        absl::StrCat(server, ": env spec differs from the other servers' (obs ", spec.obs_size(), " vs ",
+                     first.obs_size(), ", layout ", spec.part_layout(), " vs ", first.part_layout(), ")"));
+  }
+  if (std::abs(spec.control_dt() - first.control_dt()) > 1e-9) {
+    return absl::FailedPreconditionError(absl::StrCat(server, ": control_dt ", spec.control_dt(),
+                                                      " s against the other servers' ", first.control_dt(), " s"));
+  }
+  if (std::string difference = PhysicsDifference(PhysicsOf(spec), PhysicsOf(first), "the other servers'");
+      !difference.empty()) {
+    return absl::FailedPreconditionError(absl::StrCat(server, ": simulates with ", difference));
+  }
   return absl::OkStatus();
 }
 

@@ -52,6 +52,9 @@ class ServerPool {
  public:
   // INVALID_ARGUMENT for a bad --servers entry or server file (server_discovery.h).
   static absl::StatusOr<std::unique_ptr<ServerPool>> Create(ServerPoolOptions options);
+  // FAILED_PRECONDITION naming `server` when its env differs from the first server's in sizes,
+  // layout, control step or physics.
+  static absl::Status CheckSameEnv(const std::string& server, const v1::EnvSpec& spec, const v1::EnvSpec& first);
 
   // Refreshes the membership, then opens every session that is due for a (re)try; returns how many
   // are alive. Call it only while no collection uses the slots (between iterations).

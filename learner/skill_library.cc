@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "absl/strings/str_cat.h"
+#include "common/wire/physics_wire.h"
 
 namespace modskill::learner {
 namespace {
@@ -101,6 +103,10 @@ absl::Status SkillLibrary::CheckFits(const v1::EnvSpec& tracking, const v1::EnvS
   }
   if (std::abs(spec.control_dt - task.control_dt()) > 1e-9) {
     return Misfit(absl::StrCat("trained at control_dt ", spec.control_dt, ", the task session steps ", task.control_dt()));
+  }
+  if (std::string difference = PhysicsDifference(spec.physics, PhysicsOf(task), "the task session's");
+      !difference.empty()) {
+    return Misfit(absl::StrCat("trained with ", difference));
   }
   if (spec.obs_size != tracking.obs_size()) {
     return Misfit(absl::StrCat("trained on ", spec.obs_size, " observation features, this server's tracker sees ",

@@ -8,6 +8,7 @@
 #include "absl/strings/str_join.h"
 #include "common/atomic_file.h"
 #include "common/log.h"
+#include "common/wire/physics_wire.h"
 #include "learner/evaluation.h"
 #include "learner/policy_export.h"
 #include "learner/trainer.h"
@@ -50,6 +51,9 @@ absl::StatusOr<std::string> Trainer::SerializeState() {
     archive.write("residual_scale", torch::tensor(config_.residual_scale, torch::kFloat64));
     archive.write("termination_distance", torch::tensor(curriculum_.distance(), torch::kFloat64));
     archive.write("task", c10::IValue(layout_.task));
+    if (const PhysicsSettings physics = PhysicsOf(spec_); physics.recorded()) {
+      archive.write("physics", c10::IValue(physics.ToJson()));
+    }
     archive.write("reference_frames", torch::tensor(static_cast<int64_t>(config_.reference_frames)));
     archive.write("world_size", torch::tensor(static_cast<int64_t>(config_.data_parallel.world_size)));
     archive.write("controller_hidden", torch::tensor(config_.model.controller_hidden, torch::kInt64));
@@ -141,6 +145,23 @@ absl::Status CheckStoredWidths(torch::serialize::InputArchive& archive, const Mo
   return absl::OkStatus();
 }
 
+// The physics the run trained under against the server's: a run resumed on a server with another
+// --substeps or servo setting would go on training another controller. Checkpoints from before
+// the key, and servers from before the field, are not compared.
+absl::Status CheckStoredPhysics(torch::serialize::InputArchive& archive, const PhysicsSettings& server,
+                                const std::string& path) {
+  c10::IValue stored;
+  if (!archive.try_read("physics", stored)) return absl::OkStatus();
+  if (!stored.isString()) return absl::InvalidArgumentError(absl::StrCat(path, ": physics: not a JSON string"));
+  absl::StatusOr<PhysicsSettings> trained = PhysicsSettings::FromJson(stored.toStringRef(), path);
+  if (!trained.ok()) return trained.status();
+  if (std::string difference = PhysicsDifference(*trained, server, "this server's"); !difference.empty()) {
+    return absl::FailedPreconditionError(
+        absl::StrCat(path, ": trained with ", difference, "; resume against a server started as the run's was"));
+  }
+  return absl::OkStatus();
+}
+
 }  // namespace
 
 absl::Status Trainer::LoadCheckpoint(const std::string& path) {
@@ -213,6 +234,7 @@ absl::Status Trainer::CheckCheckpointMatchesRun(torch::serialize::InputArchive& 
                      layout_.amp_obs_size, " AMP floats"));
   }
   if (absl::Status status = CheckStoredWidths(archive, config_.model, path); !status.ok()) return status;
+  if (absl::Status status = CheckStoredPhysics(archive, PhysicsOf(spec_), path); !status.ok()) return status;
   if (absl::Status status = CheckStoredActionMode(archive, ActionModeOf(config_), config_.residual_scale, path);
       !status.ok()) {
     return status;

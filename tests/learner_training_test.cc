@@ -15,6 +15,7 @@
 #include "common/atomic_file.h"
 #include "common/policy/policy_checkpoint.h"
 #include "learner/evaluation.h"
+#include "learner/server_pool.h"
 #include "learner/learning_rate_decay.h"
 #include "learner/policy_import.h"
 #include "learner/skill_library.h"
@@ -492,6 +493,57 @@ TEST(LearnerTrainingTest, ReturnSettingsStayWithTheRunAcrossAResume) {
   EXPECT_DOUBLE_EQ((*changed)->config().gamma, 0.97);
   EXPECT_DOUBLE_EQ((*changed)->config().lambda, 0.8);
   server->Shutdown(absl::Seconds(1));
+}
+
+// A run's physics (the servers' rate and servos) is part of what it learned: policy.pt and
+// checkpoint.pt record it, a resume against a server with other servos is refused, and so is a
+// run whose servers disagree.
+TEST(LearnerTrainingTest, ARunKeepsThePhysicsItTrainedUnder) {
+  auto server = StartTestServer();
+  const std::string dir = RunDir("physics");
+  TrainerConfig config = SmallConfig({server->port()}, dir);
+  config.iterations = 1;
+  auto trainer = Trainer::Create(config);
+  ASSERT_TRUE(trainer.ok()) << trainer.status();
+  ASSERT_TRUE((*trainer)->Run([](const IterationStats&) {}).ok());
+  auto exported = PolicyCheckpoint::LoadFile(dir + "/policy.pt");
+  ASSERT_TRUE(exported.ok()) << exported.status();
+  EXPECT_NEAR((*exported)->spec().physics.physics_dt, 1.0 / 120, 1e-12);
+  EXPECT_EQ((*exported)->spec().physics.pd_mode, "position_implicit");
+  server->Shutdown(absl::Seconds(1));
+
+  ServerOptions stiff;
+  stiff.service.physics.pd_gain_scale = 2;
+  auto stiff_server = StartTestServer(stiff);
+  config.servers = {absl::StrCat("127.0.0.1:", stiff_server->port())};
+  config.resume = true;
+  auto resumed = Trainer::Create(config);
+  ASSERT_FALSE(resumed.ok());
+  EXPECT_EQ(resumed.status().code(), absl::StatusCode::kFailedPrecondition);
+  EXPECT_THAT(std::string(resumed.status().message()),
+              HasSubstr("checkpoint.pt: trained with pd_gain_scale 1 against this server's 2"));
+
+  // A server whose physics differs from the others' is refused by name, as one whose sizes
+  // differ is: the pool leaves it out (and keeps retrying it) while the run trains on the rest.
+  auto plain_server = StartTestServer();
+  auto plain_spec = ConnectTo(*plain_server)->Describe();
+  auto stiff_spec = ConnectTo(*stiff_server)->Describe();
+  ASSERT_TRUE(plain_spec.ok() && stiff_spec.ok());
+  EXPECT_DOUBLE_EQ(stiff_spec->physics().pd_gain_scale(), 2);
+  EXPECT_TRUE(ServerPool::CheckSameEnv("a", *plain_spec, *plain_spec).ok());
+  const absl::Status mixed = ServerPool::CheckSameEnv("127.0.0.1:9", *stiff_spec, *plain_spec);
+  EXPECT_EQ(mixed.code(), absl::StatusCode::kFailedPrecondition);
+  EXPECT_EQ(mixed.message(), "127.0.0.1:9: simulates with pd_gain_scale 2 against the other servers' 1; "
+                             "the server's --pd_gain_scale sets it");
+  TrainerConfig both = SmallConfig({plain_server->port(), stiff_server->port()}, RunDir("mixed_physics"));
+  both.iterations = 1;
+  auto trainer_of_both = Trainer::Create(both);
+  ASSERT_TRUE(trainer_of_both.ok()) << trainer_of_both.status();
+  ASSERT_TRUE((*trainer_of_both)->Run([](const IterationStats&) {}).ok());
+  EXPECT_EQ(ConnectTo(*stiff_server)->GetStats()->env_steps(), 0);
+  EXPECT_GT(ConnectTo(*plain_server)->GetStats()->env_steps(), 0);
+  stiff_server->Shutdown(absl::Seconds(1));
+  plain_server->Shutdown(absl::Seconds(1));
 }
 
 class ServerFailoverTest : public ::testing::TestWithParam<bool> {};

@@ -135,6 +135,40 @@ TEST_F(SimulationServerTest, RolloutRunsAPolicyInItsTrainedActionMode) {
   EXPECT_LT((*open_loop)[0].mpjpe_mm(), 0.75 * (*falls)[0].mpjpe_mm());
 }
 
+// A policy runs only under the physics it was trained in: one trained at 60 Hz, or with other
+// servos, is refused by a default server, naming the setting and the flag; one from before the
+// field (no physics recorded) still runs.
+TEST_F(SimulationServerTest, RolloutRefusesAPolicyTrainedUnderOtherPhysics) {
+  auto catalog = PartLayoutCatalog::LoadDefault(DefaultSpec());
+  ASSERT_TRUE(catalog.ok());
+  PhysicsOptions slow;
+  slow.substeps = 2;
+  PhysicsOptions soft;
+  soft.pd_gain_scale = 0.5;
+  const std::pair<PhysicsOptions, const char*> others[] = {
+      {slow, "checkpoint: trained with physics_dt 0.0166667 s (60 Hz) against this server's 0.00833333 s (120 Hz); "
+             "the server's --substeps sets it"},
+      {soft, "checkpoint: trained with pd_gain_scale 0.5 against this server's 1; the server's --pd_gain_scale sets it"}};
+  for (const auto& [physics, message] : others) {
+    auto humanoid = HumanoidModel::Create(DefaultSpec(), physics);
+    ASSERT_TRUE(humanoid.ok());
+    PolicySpec trained = PolicySpecForEnv(MakeEnvSpec(**humanoid, *catalog->Get("5part")));
+    auto bytes = AffinePolicyBytes(trained, {}, {});
+    ASSERT_TRUE(bytes.ok());
+    v1::RolloutRequest request;
+    request.set_checkpoint_bytes(*bytes);
+    request.add_clips("deepmimic_walk");
+    auto refused = client_->Rollout(request);
+    ASSERT_FALSE(refused.ok());
+    EXPECT_EQ(refused.status().code(), absl::StatusCode::kFailedPrecondition);
+    EXPECT_THAT(std::string(refused.status().message()), HasSubstr(message));
+
+    trained.physics = PhysicsSettings();  // as written before the field
+    request.set_checkpoint_bytes(*AffinePolicyBytes(trained, {}, {}));
+    EXPECT_TRUE(client_->Rollout(request).ok());
+  }
+}
+
 // Checkpoints from before action modes carry no action_mode: they were trained in absolute mode.
 TEST(PolicySpecTest, OldSpecsLoadAsAbsoluteAndBadModesAreRefused) {
   const std::string old_json =

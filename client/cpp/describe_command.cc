@@ -20,6 +20,11 @@ int Describe(SimulationClient& client, const std::string& part_layout) {
               spec->amp_obs_per_frame() * amp_frames);
   std::printf("  control dt    %.6g s (%.4g Hz)\n", spec->control_dt(),
               spec->control_dt() > 0 ? 1.0 / spec->control_dt() : 0.0);
+  if (const v1::PhysicsSettings& physics = spec->physics(); physics.physics_dt() > 0) {
+    std::printf("  physics       %.6g s (%.4g Hz), %s servos, gains x %g%s\n", physics.physics_dt(),
+                1.0 / physics.physics_dt(), physics.pd_mode().c_str(), physics.pd_gain_scale(),
+                physics.damp_to_reference_rate() ? ", damped toward the reference's rate" : "");
+  }
   std::printf("  bodies        %d, joints %d, clips in the library %d\n", spec->body_names_size(),
               spec->joint_names_size(), spec->num_motions());
   std::printf("  reward terms  %s\n", absl::StrJoin(spec->reward_terms(), " ").c_str());

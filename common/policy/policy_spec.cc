@@ -17,6 +17,7 @@ std::string PolicySpec::ToJson() const {
   json["action_size"] = action_size;
   json["joint_names"] = joint_names;
   json["control_dt"] = control_dt;
+  if (physics.recorded()) json["physics"] = nlohmann::json::parse(physics.ToJson());
   json["action_mode"] = ActionModeName(action.mode);
   json["residual_scale"] = action.residual_scale;
   json["task"] = task;
@@ -128,6 +129,11 @@ absl::StatusOr<PolicySpec> PolicySpec::FromJson(absl::string_view text) {
     if (!(spec.control_dt > 0 && spec.control_dt < 10)) {
       return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": control_dt: ", spec.control_dt,
                                                      " is not in (0, 10) s"));
+    }
+    if (json.contains("physics")) {
+      auto physics = PhysicsSettings::FromJson(json.at("physics").dump(), kCheckpointSpecFile);
+      if (!physics.ok()) return physics.status();
+      spec.physics = *std::move(physics);
     }
     if (json.contains("action_mode")) {
       auto mode = ParseActionMode(json.at("action_mode").get<std::string>());

@@ -13,6 +13,7 @@
 #include "absl/strings/string_view.h"
 #include "common/policy/action_mode.h"
 #include "common/policy/family_parameters.h"
+#include "common/policy/physics_settings.h"
 #include "common/policy/reference_frames.h"
 
 namespace modskill {
@@ -35,6 +36,9 @@ struct PolicySpec {
   int action_size = 0;
   std::vector<std::string> joint_names;  // action order
   double control_dt = 0;
+  // The physics rate and servos it was trained with; not recorded in policies from before the
+  // field, which any server runs.
+  PhysicsSettings physics;
   // The action mapping it was trained with; checkpoints from before action modes existed
   // were trained in absolute mode.
   ActionMapping action;
@@ -61,7 +65,8 @@ struct PolicySpec {
   // INVALID_ARGUMENT naming the field for anything but a JSON object whose sizes lie in
   // [1, kMaxPolicyVectorSize], control_dt in (0, 10) s, action mapping is valid, task is a
   // lower-case name ([a-z0-9_], 1 to 32 characters) and controller_input part_obs or
-  // proprioception, reference_frames in [1, kMaxReferenceFrames] (only a tracker's above 1).
+  // proprioception, reference_frames in [1, kMaxReferenceFrames] (only a tracker's above 1),
+  // physics (when present) valid as PhysicsSettings::FromJson reads it.
   // Absent task and controller_input read as "tracking" and "part_obs". A
   // family's ranges pass ValidateParamRange with no name twice, its clip is named and its
   // frames in [2, 1e6].

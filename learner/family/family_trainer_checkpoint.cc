@@ -8,6 +8,7 @@
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
 #include "common/atomic_file.h"
+#include "common/wire/physics_wire.h"
 #include "learner/family/family_export.h"
 #include "learner/family/family_trainer.h"
 
@@ -78,6 +79,7 @@ absl::Status FamilyTrainer::ExportPolicyFile() {
   spec.action_size = env.action_size();
   spec.joint_names.assign(env.joint_names().begin(), env.joint_names().end());
   spec.control_dt = env.control_dt();
+  spec.physics = PhysicsOf(env);
   spec.action.mode = ActionMode::kResidual;
   spec.action.residual_scale = config_.residual_scale;
   spec.family_clip = config_.clip;

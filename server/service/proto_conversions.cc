@@ -5,6 +5,7 @@
 #include <type_traits>
 
 #include "common/viewer/viewer_wire.h"
+#include "common/wire/physics_wire.h"
 #include "common/wire/tensor_codec.h"
 #include "server/core/env/episode_end.h"
 #include "server/core/env/family_episode.h"
@@ -39,6 +40,7 @@ void ToProto(const EnvSpec& spec, const HumanoidModel& humanoid, v1::EnvSpec* ou
   for (const std::string& name : bodies) out->add_body_names(name);
   for (const std::string& name : spec.joint_names) out->add_joint_names(name);
   out->set_control_dt(spec.control_dt);
+  ToWire(spec.physics, out->mutable_physics());
   for (const std::string& term : spec.reward_terms) out->add_reward_terms(term);
   out->set_task(TaskInfoOf(spec.task).name);
   out->mutable_goal_obs()->set_start(spec.goal_obs.start);

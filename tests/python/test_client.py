@@ -116,6 +116,11 @@ class ClientTest(unittest.TestCase):
         self.assertEqual(spec.action_offset.shape, (69,))
         self.assertEqual(spec.action_scale.shape, (69,))
         self.assertAlmostEqual(spec.control_dt, 1 / 30, places=6)
+        # The server's default physics: 4 substeps of position servos at their own gains.
+        self.assertAlmostEqual(spec.physics.physics_dt, 1 / 120, places=9)
+        self.assertEqual(spec.physics.pd_mode, "position_implicit")
+        self.assertEqual(spec.physics.pd_gain_scale, 1.0)
+        self.assertFalse(spec.physics.damp_to_reference_rate)
         self.assertEqual(len(spec.reward_terms), 5)
         self.assertEqual(spec.num_motions, 20)
 

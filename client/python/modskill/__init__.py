@@ -31,7 +31,7 @@ The generated protocol modules are ``modskill.v1.modskill_pb2`` and ``modskill_p
 
 from .client import Client, Session, read_token_file
 from .errors import ConnectError, ServerError
-from .types import BodyGeometry, BodyPart, ClipRollout, EnvSpec, FamilyQuery, StepResult
+from .types import BodyGeometry, BodyPart, ClipRollout, EnvSpec, FamilyQuery, PhysicsSettings, StepResult
 from . import viewer
 from .vector_env import Box, VectorEnv
 
@@ -47,6 +47,7 @@ __all__ = [
     "EnvSpec",
     "BodyPart",
     "BodyGeometry",
+    "PhysicsSettings",
     "StepResult",
     "ClipRollout",
     "FamilyQuery",

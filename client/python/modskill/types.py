@@ -47,6 +47,23 @@ _SHAPES = {pb.BodyGeometry.SPHERE: "sphere", pb.BodyGeometry.CAPSULE: "capsule",
 
 
 @dataclasses.dataclass(frozen=True)
+class PhysicsSettings:
+    """How the session simulates beyond its control step (the server's --substeps, --pd_mode,
+    --pd_gain_scale, --damp_to_reference_rate). A policy runs only under the physics it was
+    trained in; ``physics_dt`` is 0 from a server older than the field."""
+
+    physics_dt: float = 0.0  # seconds per physics step (control_dt / substeps)
+    pd_mode: str = ""  # "position_implicit" or "stable_pd"
+    pd_gain_scale: float = 0.0
+    damp_to_reference_rate: bool = False
+
+    @classmethod
+    def from_proto(cls, physics: pb.PhysicsSettings) -> "PhysicsSettings":
+        return cls(physics_dt=physics.physics_dt, pd_mode=physics.pd_mode, pd_gain_scale=physics.pd_gain_scale,
+                   damp_to_reference_rate=physics.damp_to_reference_rate)
+
+
+@dataclasses.dataclass(frozen=True)
 class BodyGeometry:
     """A body's collision geometry in its own frame (one geom per body), for viewers.
 
@@ -108,6 +125,7 @@ class EnvSpec:
     # Tracking: the upcoming reference frames each body observes (SessionConfig.reference_frames);
     # its task features are that many blocks of 24 after its self features, the next frame's first.
     reference_frames: int = 1
+    physics: PhysicsSettings = PhysicsSettings()
 
     @classmethod
     def from_proto(cls, spec: pb.EnvSpec) -> "EnvSpec":
@@ -147,6 +165,7 @@ class EnvSpec:
             family={r.name: (r.lo, r.hi) for r in spec.family},
             time_warp_action=spec.time_warp_action if spec.family else -1,
             reference_frames=max(1, spec.reference_frames),  # 0 from a server older than the field
+            physics=PhysicsSettings.from_proto(spec.physics),
         )
 
     @property

@@ -56,6 +56,11 @@ EnvSpec MakeEnvSpec(const HumanoidModel& humanoid, const PartLayout& layout, Tas
   env.amp_obs_per_frame = 1 + 6 + 3 + 3 + 6 * (spec.num_bodies() - 1) + spec.num_hinges() + 3 * kNumAmpKeyBodies;
   env.amp_obs_size = kAmpHistory * env.amp_obs_per_frame;
   env.control_dt = humanoid.options().control_dt();
+  const PhysicsOptions& physics = humanoid.options();
+  env.physics.physics_dt = physics.physics_dt();
+  env.physics.pd_mode = std::string(PdModeName(physics.pd_mode));
+  env.physics.pd_gain_scale = physics.pd_gain_scale;
+  env.physics.damp_to_reference_rate = physics.damp_to_reference_rate;
   env.body_names = spec.BodyNames();
   return env;
 }

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "common/policy/family_parameters.h"
+#include "common/policy/physics_settings.h"
 #include "server/core/env/task_catalog.h"
 #include "server/core/sim/humanoid_model.h"
 #include "server/core/sim/part_layout.h"
@@ -60,6 +61,7 @@ struct EnvSpec {
   int amp_obs_per_frame = 0;
   int amp_obs_size = 0;  // kAmpHistory frames, newest first
   double control_dt = 0;
+  PhysicsSettings physics;  // the humanoid's rate and servos, as policies record them
   std::vector<std::string> body_names;
   std::vector<std::string> joint_names;  // hinges in action order
   // A motor-skill family session (family_env.h): its parameter ranges, and the action index of

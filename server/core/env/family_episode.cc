@@ -165,6 +165,10 @@ void AddFamilyToSpec(const std::vector<ParamRange>& ranges, EnvSpec* spec) {
   spec->action_size += 1;
   spec->reward_terms = {"pos", "rot", "vel", "ang_vel", "time", "task", "energy"};
   spec->family = ranges;
+  // A family session simulates with stable PD (env_batch.cc's ModelForTask) and tracks a warped
+  // clip that has no rate to damp toward, whatever the server's flags.
+  spec->physics.pd_mode = "stable_pd";
+  spec->physics.damp_to_reference_rate = false;
 }
 
 double PhaseStep(float tau) { return std::exp(std::clamp(1.5 * static_cast<double>(tau), -2.0, 1.0)); }

@@ -1,6 +1,7 @@
 #include "server/core/env/policy_fit.h"
 
 #include <cmath>
+#include <string>
 
 #include "absl/strings/str_cat.h"
 
@@ -13,6 +14,7 @@ PolicySpec PolicySpecForEnv(const EnvSpec& spec) {
   policy.action_size = spec.action_size;
   policy.joint_names = spec.joint_names;
   policy.control_dt = spec.control_dt;
+  policy.physics = spec.physics;
   policy.task = TaskInfoOf(spec.task).name;
   policy.reference_frames = spec.reference_frames;
   return policy;
@@ -32,6 +34,9 @@ absl::Status CheckPolicyFitsEnv(const PolicySpec& policy, const EnvSpec& server,
   if (policy.obs_size != server.obs_size) return mismatch("obs_size", policy.obs_size, server.obs_size);
   if (policy.action_size != server.action_size) return mismatch("action_size", policy.action_size, server.action_size);
   if (std::abs(policy.control_dt - server.control_dt) > 1e-9) return mismatch("control_dt", policy.control_dt, server.control_dt);
+  if (std::string difference = PhysicsDifference(policy.physics, server.physics, "this server's"); !difference.empty()) {
+    return absl::FailedPreconditionError(absl::StrCat("checkpoint: trained with ", difference));
+  }
   if (policy.joint_names != server.joint_names) {
     return absl::FailedPreconditionError("checkpoint: trained with another joint order (joint_names differ)");
   }

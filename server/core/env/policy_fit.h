@@ -10,12 +10,12 @@
 
 namespace modskill {
 
-// The env's task, layout, sizes, joint order and control step; the action mapping and the
+// The env's task, layout, sizes, joint order, control step and physics; the action mapping and the
 // controller input left at their defaults.
 PolicySpec PolicySpecForEnv(const EnvSpec& spec);
 
-// FAILED_PRECONDITION naming the first difference (task, layout, sizes, control step, joint
-// order). `env_task` is the task the env runs (PolicySpec::task; Rollout runs tracking); the task
+// FAILED_PRECONDITION naming the first difference (task, layout, sizes, control step, physics
+// when the policy records it, joint order). `env_task` is the task the env runs (PolicySpec::task; Rollout runs tracking); the task
 // comes first, since a task policy's observation size differs from a tracker's anyway.
 absl::Status CheckPolicyFitsEnv(const PolicySpec& policy, const EnvSpec& server,
                                 absl::string_view env_task = kTrackingTask);
