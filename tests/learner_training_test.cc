@@ -496,8 +496,8 @@ TEST(LearnerTrainingTest, ReturnSettingsStayWithTheRunAcrossAResume) {
 }
 
 // A run's physics (the servers' rate and servos) is part of what it learned: policy.pt and
-// checkpoint.pt record it, a resume against a server with other servos is refused, and so is a
-// run whose servers disagree.
+// checkpoint.pt record it, a resume against a server with other servos is refused, and a server
+// whose physics differs from the run's other servers' is left out.
 TEST(LearnerTrainingTest, ARunKeepsThePhysicsItTrainedUnder) {
   auto server = StartTestServer();
   const std::string dir = RunDir("physics");

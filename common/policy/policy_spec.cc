@@ -92,6 +92,15 @@ absl::Status ReadReferenceFrames(const nlohmann::json& json, PolicySpec* spec) {
   return absl::OkStatus();
 }
 
+// The physics the policy was trained under (not recorded when the file predates the field).
+absl::Status ReadPhysics(const nlohmann::json& json, PolicySpec* spec) {
+  if (!json.contains("physics")) return absl::OkStatus();
+  auto physics = PhysicsSettings::FromJson(json.at("physics").dump(), kCheckpointSpecFile);
+  if (!physics.ok()) return physics.status();
+  spec->physics = *std::move(physics);
+  return absl::OkStatus();
+}
+
 }  // namespace
 
 absl::StatusOr<PolicySpec> PolicySpec::FromJson(absl::string_view text) {
@@ -130,11 +139,7 @@ absl::StatusOr<PolicySpec> PolicySpec::FromJson(absl::string_view text) {
       return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": control_dt: ", spec.control_dt,
                                                      " is not in (0, 10) s"));
     }
-    if (json.contains("physics")) {
-      auto physics = PhysicsSettings::FromJson(json.at("physics").dump(), kCheckpointSpecFile);
-      if (!physics.ok()) return physics.status();
-      spec.physics = *std::move(physics);
-    }
+    if (absl::Status status = ReadPhysics(json, &spec); !status.ok()) return status;
     if (json.contains("action_mode")) {
       auto mode = ParseActionMode(json.at("action_mode").get<std::string>());
       if (!mode.ok()) return absl::InvalidArgumentError(absl::StrCat(kCheckpointSpecFile, ": action_mode: ", mode.status().message()));
