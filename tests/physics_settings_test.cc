@@ -38,7 +38,7 @@ TEST(PhysicsSettingsTest, JsonRoundTripsAndBadFieldsAreNamed) {
       {R"({"physics_dt": 0, "pd_mode": "stable_pd", "pd_gain_scale": 1, "damp_to_reference_rate": false})",
        "policy: physics.physics_dt: 0 is not in (0, 1] s"},
       {R"({"physics_dt": 0.01, "pd_mode": "stable_pd", "pd_gain_scale": 1000, "damp_to_reference_rate": false})",
-       "policy: physics.pd_gain_scale: 1000 is not in (0, 100]"},
+       "policy: physics.pd_gain_scale: 1000 must be finite, in (0, 100]"},
       {R"({"physics_dt": 0.01, "pd_mode": "springs", "pd_gain_scale": 1, "damp_to_reference_rate": false})",
        "policy: physics.pd_mode: \"springs\" is not position_implicit or stable_pd"},
       {R"({"physics_dt": 0.01, "pd_mode": "stable_pd", "pd_gain_scale": 1, "damp_to_reference_rate": 1})",

@@ -7,12 +7,11 @@
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "common/servo_settings.h"
 #include "common/shown_value.h"
 
 namespace modskill {
 namespace {
-
-bool IsPdMode(absl::string_view mode) { return mode == "position_implicit" || mode == "stable_pd"; }
 
 std::string Rate(double physics_dt) { return absl::StrFormat("%g s (%.0f Hz)", physics_dt, 1.0 / physics_dt); }
 
@@ -45,13 +44,14 @@ absl::StatusOr<PhysicsSettings> PhysicsSettings::FromJson(absl::string_view text
     return bad("physics_dt", absl::StrCat(settings.physics_dt, " is not in (0, 1] s"));
   }
   settings.pd_gain_scale = json.at("pd_gain_scale").get<double>();
-  if (!(std::isfinite(settings.pd_gain_scale) && settings.pd_gain_scale > 0 && settings.pd_gain_scale <= 100)) {
-    return bad("pd_gain_scale", absl::StrCat(settings.pd_gain_scale, " is not in (0, 100]"));
+  if (absl::Status status = ValidatePdGainScale(settings.pd_gain_scale, absl::StrCat(where, ": physics.pd_gain_scale"));
+      !status.ok()) {
+    return status;
   }
   if (!json.contains("pd_mode") || !json.at("pd_mode").is_string() ||
-      !IsPdMode(json.at("pd_mode").get_ref<const std::string&>())) {
+      !IsPdModeName(json.at("pd_mode").get_ref<const std::string&>())) {
     return bad("pd_mode", absl::StrCat(json.contains("pd_mode") ? ShownValue(json.at("pd_mode").dump()) : "missing",
-                                       " is not position_implicit or stable_pd"));
+                                       " is not ", kPdModeChoices));
   }
   settings.pd_mode = json.at("pd_mode").get<std::string>();
   if (!json.contains("damp_to_reference_rate") || !json.at("damp_to_reference_rate").is_boolean()) {

@@ -12,12 +12,13 @@
 
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
+#include "common/servo_settings.h"
 
 namespace modskill {
 
 struct PhysicsSettings {
   double physics_dt = 0;  // s, one physics step; 0: not recorded (files and servers from before)
-  std::string pd_mode = "position_implicit";
+  std::string pd_mode = std::string(kPdModePositionImplicit);
   double pd_gain_scale = 1;
   bool damp_to_reference_rate = false;
 
@@ -26,7 +27,7 @@ struct PhysicsSettings {
   // A JSON object {"physics_dt", "pd_mode", "pd_gain_scale", "damp_to_reference_rate"}.
   std::string ToJson() const;
   // INVALID_ARGUMENT naming `where` and the field for anything but such an object with physics_dt
-  // in (0, 1] s, pd_mode position_implicit or stable_pd, pd_gain_scale in (0, 100].
+  // in (0, 1] s, pd_mode and pd_gain_scale as the server's flags take them (common/servo_settings.h).
   static absl::StatusOr<PhysicsSettings> FromJson(absl::string_view json, absl::string_view where);
 };
 

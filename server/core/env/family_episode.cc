@@ -8,6 +8,7 @@
 
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
+#include "common/servo_settings.h"
 #include "server/core/sim/mjcf_builder.h"
 #include "server/core/sim/rotation_math.h"
 
@@ -167,7 +168,7 @@ void AddFamilyToSpec(const std::vector<ParamRange>& ranges, EnvSpec* spec) {
   spec->family = ranges;
   // A family session simulates with stable PD (env_batch.cc's ModelForTask) and tracks a warped
   // clip that has no rate to damp toward, whatever the server's flags.
-  spec->physics.pd_mode = "stable_pd";
+  spec->physics.pd_mode = std::string(kPdModeStablePd);
   spec->physics.damp_to_reference_rate = false;
 }
 

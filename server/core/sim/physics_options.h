@@ -6,6 +6,7 @@
 
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
+#include "common/servo_settings.h"  // ValidatePdGainScale, the mode names
 
 namespace modskill {
 
@@ -20,8 +21,6 @@ enum class PdMode {
 
 absl::string_view PdModeName(PdMode mode);
 absl::StatusOr<PdMode> ParsePdMode(absl::string_view name);
-// OK when `scale` is finite, in (0, 100]; otherwise an error naming `what` (a field or a flag).
-absl::Status ValidatePdGainScale(double scale, absl::string_view what);
 // OK when `substeps` (physics steps per control step) is in [1, 100]; otherwise an error naming `what`.
 absl::Status ValidateSubsteps(int substeps, absl::string_view what);
 
