@@ -1,5 +1,5 @@
 // Skill composition and interpolation (issue 13): the exported policy's skills() and
-// act_with_z(), an older export re-exported with them, and the server's Rollout recording z
+// act_with_z(), an older export re-exported with them (and with its physics recorded), and the server's Rollout recording z
 // (record_skills) and composing it across clips (composition), with the bad inputs it refuses.
 #include <cmath>
 #include <filesystem>
@@ -12,12 +12,14 @@
 #include <torch/torch.h>
 
 #include "common/atomic_file.h"
+#include "common/policy/physics_settings.h"
 #include "common/policy/policy_checkpoint.h"
 #include "common/wire/tensor_codec.h"
 #include "learner/model_config.h"
 #include "learner/modskill_policy.h"
 #include "learner/policy_export.h"
 #include "learner/policy_import.h"
+#include "learner/policy_upgrade.h"
 #include "learner/running_mean_std.h"
 #include "server/core/env/skill_composition.h"
 #include "tests/env_specs.h"
@@ -150,10 +152,12 @@ TEST(SkillExportTest, AnOldExportHasNoSkillsAndIsReexportedWithThem) {
 
   auto exported = learner::ReadExportedPolicy(old);
   ASSERT_TRUE(exported.ok()) << exported.status();
-  auto rebuilt = learner::RebuildTracker(*exported, LayoutFromWireSpec(SpecsOf("5part").wire));
-  ASSERT_TRUE(rebuilt.ok()) << rebuilt.status();
   const std::string upgraded = TempDir() + "/upgraded_tracker.pt";
-  ASSERT_TRUE(ExportPolicy(rebuilt->policy, rebuilt->obs_norm, exported->spec, upgraded).ok());
+  auto upgrade = learner::UpgradePolicy(*exported, SpecsOf("5part").wire, upgraded);
+  ASSERT_TRUE(upgrade.ok()) << upgrade.status();
+  EXPECT_EQ(upgrade->parts, kParts);
+  EXPECT_LT(upgrade->forward_difference, 1e-6);
+  EXPECT_FALSE(upgrade->physics_added);  // it had its record already
   torch::NoGradGuard no_grad;
   const torch::Tensor obs = torch::randn({4, SpecsOf("5part").wire.obs_size()}) * 2.0;
   torch::jit::Module before = torch::jit::load(old), after = torch::jit::load(upgraded);
@@ -161,6 +165,35 @@ TEST(SkillExportTest, AnOldExportHasNoSkillsAndIsReexportedWithThem) {
   auto reloaded = PolicyCheckpoint::LoadFile(upgraded);
   ASSERT_TRUE(reloaded.ok());
   EXPECT_TRUE((*reloaded)->has_skills());
+}
+
+// A file from before policies recorded their physics gains the server's; a file that records
+// other physics than the server's is refused by name, and nothing is written.
+TEST(SkillExportTest, AnUpgradeRecordsTheServersPhysicsAndRefusesOtherPhysics) {
+  auto exported = learner::ReadExportedPolicy(OldExport(Tracker(), "old_for_physics.pt"));
+  ASSERT_TRUE(exported.ok()) << exported.status();
+  ASSERT_TRUE(exported->spec.physics.recorded());
+  const PhysicsSettings trained = exported->spec.physics;
+
+  learner::ExportedPolicy unrecorded = *exported;
+  unrecorded.spec.physics = PhysicsSettings{};
+  const std::string stamped = TempDir() + "/upgraded_with_physics.pt";
+  auto upgrade = learner::UpgradePolicy(unrecorded, SpecsOf("5part").wire, stamped);
+  ASSERT_TRUE(upgrade.ok()) << upgrade.status();
+  EXPECT_TRUE(upgrade->physics_added);
+  auto reread = learner::ReadExportedPolicy(stamped);
+  ASSERT_TRUE(reread.ok()) << reread.status();
+  EXPECT_EQ(reread->spec.physics.ToJson(), trained.ToJson());
+
+  v1::EnvSpec stiffer = SpecsOf("5part").wire;
+  stiffer.mutable_physics()->set_pd_gain_scale(2);
+  const std::string refused = TempDir() + "/upgraded_refused.pt";
+  std::filesystem::remove(refused);
+  auto mismatch = learner::UpgradePolicy(*exported, stiffer, refused);
+  EXPECT_EQ(mismatch.status().code(), absl::StatusCode::kFailedPrecondition);
+  EXPECT_THAT(std::string(mismatch.status().message()), HasSubstr("pd_gain_scale 1 against this server's 2"));
+  EXPECT_FALSE(std::filesystem::exists(refused));
+  EXPECT_FALSE(std::filesystem::exists(refused + ".upgrade"));
 }
 
 // A skills() that returns no [n, parts, embed_dim] leaves forward usable and composition refused.

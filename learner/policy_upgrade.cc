@@ -1,0 +1,85 @@
+#include "learner/policy_upgrade.h"
+
+#include <cstdio>
+#include <exception>
+#include <utility>
+
+#include <torch/script.h>
+
+#include "absl/strings/str_cat.h"
+#include "common/wire/physics_wire.h"
+#include "learner/model_config.h"
+#include "learner/policy_export.h"
+
+namespace modskill::learner {
+namespace {
+
+// The largest |old forward - new forward| (and |old forward - act_with_z(skills)|) over random raw
+// observations, scaled like real ones.
+absl::StatusOr<double> ForwardDifference(const std::string& old_path, const std::string& new_path, int64_t obs_size) {
+  try {
+    torch::NoGradGuard no_grad;
+    torch::manual_seed(1);
+    const torch::Tensor obs = torch::randn({64, obs_size}) * 2.0;
+    torch::jit::Module before = torch::jit::load(old_path), after = torch::jit::load(new_path);
+    const torch::Tensor a = before.forward({obs}).toTensor(), b = after.forward({obs}).toTensor();
+    const torch::Tensor composed =
+        after.get_method("act_with_z")({obs, after.get_method("skills")({obs}).toTensor()}).toTensor();
+    return std::max((a - b).abs().max().item<double>(), (a - composed).abs().max().item<double>());
+  } catch (const std::exception& e) {
+    std::string message = e.what();
+    return absl::InternalError(absl::StrCat("checking the export: ", message.substr(0, message.find('\n'))));
+  }
+}
+
+// The physics the upgraded file records: its own, which must be the server's, or the server's.
+absl::Status TakePhysics(const v1::EnvSpec& server_spec, ExportedPolicy& exported, PolicyUpgrade& upgrade) {
+  const PhysicsSettings server = PhysicsOf(server_spec);
+  if (exported.spec.physics.recorded()) {
+    if (std::string difference = PhysicsDifference(exported.spec.physics, server, "this server's");
+        !difference.empty()) {
+      return absl::FailedPreconditionError(absl::StrCat(exported.path, ": trained with ", difference,
+                                                        "; upgrade it against a server with the physics it was trained in"));
+    }
+  } else if (server.recorded()) {
+    exported.spec.physics = server;
+    upgrade.physics_added = true;
+  }
+  upgrade.physics = exported.spec.physics;
+  return absl::OkStatus();
+}
+
+}  // namespace
+
+absl::StatusOr<PolicyUpgrade> UpgradePolicy(ExportedPolicy exported, const v1::EnvSpec& server_spec,
+                                            const std::string& out) {
+  PolicyUpgrade upgrade;
+  if (absl::Status status = TakePhysics(server_spec, exported, upgrade); !status.ok()) return status;
+  const NetworkLayout layout = LayoutFromWireSpec(server_spec);
+  if (absl::Status valid = layout.Validate(); !valid.ok()) return valid;
+  auto rebuilt = RebuildTracker(exported, layout);
+  if (!rebuilt.ok()) return rebuilt.status();
+  // What the rebuilt controllers read, also for files from before the spec recorded it.
+  exported.spec.controller_input = ControllerInputName(rebuilt->policy->config().controller_input);
+  // Written beside OUT first, so that a failed check leaves OUT alone.
+  const std::string staged = out + ".upgrade";
+  if (absl::Status status = ExportPolicy(rebuilt->policy, rebuilt->obs_norm, exported.spec, staged); !status.ok()) {
+    return status;
+  }
+  auto difference = ForwardDifference(exported.path, staged, layout.obs_size);
+  if (!difference.ok() || *difference > 1e-5) {
+    std::remove(staged.c_str());
+    if (!difference.ok()) return difference.status();
+    return absl::InternalError(absl::StrCat("the re-exported forward differs from ", exported.path, " by ", *difference));
+  }
+  if (std::rename(staged.c_str(), out.c_str()) != 0) {
+    std::remove(staged.c_str());
+    return absl::InternalError(absl::StrCat(out, ": cannot move ", staged, " there"));
+  }
+  upgrade.parts = static_cast<int>(layout.parts.size());
+  upgrade.embed_dim = rebuilt->policy->config().embed_dim;
+  upgrade.forward_difference = *difference;
+  return upgrade;
+}
+
+}  // namespace modskill::learner

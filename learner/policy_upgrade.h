@@ -1,0 +1,36 @@
+// What modskill-policy-upgrade does to one tracker's policy.pt: re-export it with today's script
+// (skills() and act_with_z() beside forward, the same weights; policy_export.h) and, for a file
+// from before policies recorded their physics, record the physics of the server that describes
+// it, which must be the physics it was trained under (common/policy/physics_settings.h).
+#ifndef MODSKILL_LEARNER_POLICY_UPGRADE_H_
+#define MODSKILL_LEARNER_POLICY_UPGRADE_H_
+
+#include <cstdint>
+#include <string>
+
+#include "absl/status/statusor.h"
+#include "common/policy/physics_settings.h"
+#include "learner/policy_import.h"
+#include "modskill/v1/modskill.pb.h"
+
+namespace modskill::learner {
+
+struct PolicyUpgrade {
+  int parts = 0;
+  int64_t embed_dim = 0;
+  double forward_difference = 0;  // the largest |old forward - new forward| on random observations
+  bool physics_added = false;     // the file had no physics record; it now carries `physics`
+  PhysicsSettings physics;        // what the written file records
+};
+
+// Writes `exported` (read from exported.path) to `out` with today's script. `server_spec` is the
+// server's Describe for the policy's part layout: its observation slices, which the file does not
+// hold, and its physics. FAILED_PRECONDITION naming the setting when the file records physics
+// other than the server's; INTERNAL when the new forward differs from the old one by more than
+// 1e-5. OUT is written only when every check passes (staged beside it, then renamed).
+absl::StatusOr<PolicyUpgrade> UpgradePolicy(ExportedPolicy exported, const v1::EnvSpec& server_spec,
+                                            const std::string& out);
+
+}  // namespace modskill::learner
+
+#endif  // MODSKILL_LEARNER_POLICY_UPGRADE_H_
