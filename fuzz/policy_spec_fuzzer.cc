@@ -12,6 +12,7 @@
 
 #include "common/policy/family_elites.h"
 #include "common/policy/policy_spec.h"
+#include "common/servo_settings.h"
 #include "fuzz/fuzz_service.h"
 #include "server/core/env/policy_fit.h"
 
@@ -29,8 +30,9 @@ void FuzzPolicySpec(const uint8_t* data, size_t size) {
   Check(spec->joint_names.size() <= static_cast<size_t>(kMaxPolicyVectorSize), "joint_names bounded");
   Check(spec->control_dt > 0 && spec->control_dt < 10, "control_dt in (0, 10)");
   Check(spec->action.Validate().ok(), "valid action mapping");
-  Check(!spec->physics.recorded() || (spec->physics.physics_dt <= 1 && spec->physics.pd_gain_scale > 0 &&
-                                      spec->physics.pd_gain_scale <= 100),
+  Check(!spec->physics.recorded() || (spec->physics.physics_dt <= 1 &&
+                                      ValidatePdGainScale(spec->physics.pd_gain_scale, "pd_gain_scale").ok() &&
+                                      IsPdModeName(spec->physics.pd_mode)),
         "recorded physics in bounds");
 
   auto again = PolicySpec::FromJson(spec->ToJson());
