@@ -45,10 +45,6 @@ absl::StatusOr<EvaluationReport> Evaluate(SimulationClient& client, const std::s
                                           const std::string& checkpoint_bytes, const std::vector<std::string>& clips,
                                           const std::function<void(const v1::RolloutFrame&)>& on_frame = nullptr);
 
-// The metadata of a policy for a server's env `spec` (its task included), run with `action`
-// (what policy.pt carries; the caller sets controller_input).
-PolicySpec PolicySpecOf(const v1::EnvSpec& spec, const ActionMapping& action);
-
 // The open-loop reference baseline: a zero policy in residual mode, so every PD target is the
 // reference pose of the next frame. What a learned tracker must beat.
 absl::StatusOr<std::string> OpenLoopReferencePolicy(const v1::EnvSpec& spec);

@@ -2,11 +2,13 @@
 
 #include <cstdio>
 #include <exception>
+#include <sstream>
 #include <utility>
 
 #include <torch/script.h>
 
 #include "absl/strings/str_cat.h"
+#include "common/atomic_file.h"
 #include "common/wire/physics_wire.h"
 #include "learner/model_config.h"
 #include "learner/policy_export.h"
@@ -49,33 +51,66 @@ absl::Status TakePhysics(const v1::EnvSpec& server_spec, ExportedPolicy& exporte
   return absl::OkStatus();
 }
 
+// Moves the staged file onto `out` when the check passed; removes it otherwise.
+absl::Status Commit(const std::string& staged, const std::string& out, const std::string& in,
+                    const absl::StatusOr<double>& difference) {
+  if (!difference.ok() || *difference > 1e-5) {
+    std::remove(staged.c_str());
+    if (!difference.ok()) return difference.status();
+    return absl::InternalError(absl::StrCat("the re-exported forward differs from ", in, " by ", *difference));
+  }
+  if (std::rename(staged.c_str(), out.c_str()) != 0) {
+    std::remove(staged.c_str());
+    return absl::InternalError(absl::StrCat(out, ": cannot move ", staged, " there"));
+  }
+  return absl::OkStatus();
+}
+
+// A task policy (a head over frozen skills) is exported by today's script already: its archive is
+// saved again as it is, with the spec that records the physics.
+absl::StatusOr<double> ResaveWithSpec(const ExportedPolicy& exported, const std::string& staged) {
+  try {
+    torch::NoGradGuard no_grad;
+    torch::jit::Module module = torch::jit::load(exported.path);
+    std::ostringstream bytes(std::ios::binary);
+    module.save(bytes, {{kCheckpointSpecFile, exported.spec.ToJson()}});
+    if (absl::Status status = WriteFileAtomically(staged, bytes.str()); !status.ok()) return status;
+    torch::manual_seed(1);
+    const torch::Tensor obs = torch::randn({64, exported.spec.obs_size}) * 2.0;
+    torch::jit::Module after = torch::jit::load(staged);
+    return (module.forward({obs}).toTensor() - after.forward({obs}).toTensor()).abs().max().item<double>();
+  } catch (const std::exception& e) {
+    std::string message = e.what();
+    return absl::InternalError(absl::StrCat("re-saving ", exported.path, ": ", message.substr(0, message.find('\n'))));
+  }
+}
+
 }  // namespace
 
 absl::StatusOr<PolicyUpgrade> UpgradePolicy(ExportedPolicy exported, const v1::EnvSpec& server_spec,
                                             const std::string& out) {
   PolicyUpgrade upgrade;
   if (absl::Status status = TakePhysics(server_spec, exported, upgrade); !status.ok()) return status;
+  // Written beside OUT first, so that a failed check leaves OUT alone.
+  const std::string staged = out + ".upgrade";
+  if (exported.spec.task != kTrackingTask) {
+    const absl::StatusOr<double> difference = ResaveWithSpec(exported, staged);
+    if (absl::Status status = Commit(staged, out, exported.path, difference); !status.ok()) return status;
+    upgrade.forward_difference = *difference;
+    return upgrade;
+  }
   const NetworkLayout layout = LayoutFromWireSpec(server_spec);
   if (absl::Status valid = layout.Validate(); !valid.ok()) return valid;
   auto rebuilt = RebuildTracker(exported, layout);
   if (!rebuilt.ok()) return rebuilt.status();
   // What the rebuilt controllers read, also for files from before the spec recorded it.
   exported.spec.controller_input = ControllerInputName(rebuilt->policy->config().controller_input);
-  // Written beside OUT first, so that a failed check leaves OUT alone.
-  const std::string staged = out + ".upgrade";
   if (absl::Status status = ExportPolicy(rebuilt->policy, rebuilt->obs_norm, exported.spec, staged); !status.ok()) {
     return status;
   }
-  auto difference = ForwardDifference(exported.path, staged, layout.obs_size);
-  if (!difference.ok() || *difference > 1e-5) {
-    std::remove(staged.c_str());
-    if (!difference.ok()) return difference.status();
-    return absl::InternalError(absl::StrCat("the re-exported forward differs from ", exported.path, " by ", *difference));
-  }
-  if (std::rename(staged.c_str(), out.c_str()) != 0) {
-    std::remove(staged.c_str());
-    return absl::InternalError(absl::StrCat(out, ": cannot move ", staged, " there"));
-  }
+  const absl::StatusOr<double> difference = ForwardDifference(exported.path, staged, layout.obs_size);
+  if (absl::Status status = Commit(staged, out, exported.path, difference); !status.ok()) return status;
+  upgrade.rebuilt = true;
   upgrade.parts = static_cast<int>(layout.parts.size());
   upgrade.embed_dim = rebuilt->policy->config().embed_dim;
   upgrade.forward_difference = *difference;

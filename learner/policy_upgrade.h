@@ -1,7 +1,8 @@
-// What modskill-policy-upgrade does to one tracker's policy.pt: re-export it with today's script
-// (skills() and act_with_z() beside forward, the same weights; policy_export.h) and, for a file
-// from before policies recorded their physics, record the physics of the server that describes
-// it, which must be the physics it was trained under (common/policy/physics_settings.h).
+// What modskill-policy-upgrade does to one policy.pt: a tracker is re-exported with today's script
+// (skills() and act_with_z() beside forward, the same weights; policy_export.h), a task policy
+// saved again as it is; and a file from before policies recorded their physics gets the physics
+// of the server that describes it, which must be the physics it was trained under
+// (common/policy/physics_settings.h).
 #ifndef MODSKILL_LEARNER_POLICY_UPGRADE_H_
 #define MODSKILL_LEARNER_POLICY_UPGRADE_H_
 
@@ -16,6 +17,7 @@
 namespace modskill::learner {
 
 struct PolicyUpgrade {
+  bool rebuilt = false;  // a tracker re-exported with today's script (else a task policy re-saved)
   int parts = 0;
   int64_t embed_dim = 0;
   double forward_difference = 0;  // the largest |old forward - new forward| on random observations
@@ -23,9 +25,10 @@ struct PolicyUpgrade {
   PhysicsSettings physics;        // what the written file records
 };
 
-// Writes `exported` (read from exported.path) to `out` with today's script. `server_spec` is the
-// server's Describe for the policy's part layout: its observation slices, which the file does not
-// hold, and its physics. FAILED_PRECONDITION naming the setting when the file records physics
+// Writes `exported` (read from exported.path) to `out`: a tracker with today's script, a task
+// policy's archive unchanged but for its spec. `server_spec` is the server's Describe for the
+// policy's part layout: its observation slices, which a tracker's file does not hold, and its
+// physics. FAILED_PRECONDITION naming the setting when the file records physics
 // other than the server's; INTERNAL when the new forward differs from the old one by more than
 // 1e-5. OUT is written only when every check passes (staged beside it, then renamed).
 absl::StatusOr<PolicyUpgrade> UpgradePolicy(ExportedPolicy exported, const v1::EnvSpec& server_spec,

@@ -9,7 +9,7 @@
 #include "common/atomic_file.h"
 #include "common/log.h"
 #include "common/wire/physics_wire.h"
-#include "learner/evaluation.h"
+#include "common/wire/policy_spec_wire.h"
 #include "learner/policy_export.h"
 #include "learner/trainer.h"
 

@@ -196,6 +196,35 @@ TEST(SkillExportTest, AnUpgradeRecordsTheServersPhysicsAndRefusesOtherPhysics) {
   EXPECT_FALSE(std::filesystem::exists(refused + ".upgrade"));
 }
 
+// A task policy is saved again as it is (same forward, same task, skills() kept), now with the
+// server's physics, and other physics than the server's is refused as for a tracker.
+TEST(SkillExportTest, AnUpgradeStampsATaskPolicyWithoutRebuildingIt) {
+  auto exported = learner::ReadExportedPolicy(ExportSteerPolicy());
+  ASSERT_TRUE(exported.ok()) << exported.status();
+  ASSERT_TRUE(exported->spec.physics.recorded());
+  const PhysicsSettings trained = exported->spec.physics;
+  exported->spec.physics = PhysicsSettings{};
+  const std::string stamped = TempDir() + "/steer_with_physics.pt";
+  auto upgrade = learner::UpgradePolicy(*exported, SpecsOf("5part").wire, stamped);
+  ASSERT_TRUE(upgrade.ok()) << upgrade.status();
+  EXPECT_FALSE(upgrade->rebuilt);
+  EXPECT_TRUE(upgrade->physics_added);
+  EXPECT_EQ(upgrade->forward_difference, 0.0);
+  auto checkpoint = PolicyCheckpoint::LoadFile(stamped);
+  ASSERT_TRUE(checkpoint.ok()) << checkpoint.status();
+  EXPECT_EQ((*checkpoint)->spec().task, "steer");
+  EXPECT_EQ((*checkpoint)->spec().physics.ToJson(), trained.ToJson());
+  EXPECT_TRUE((*checkpoint)->has_skills());
+  EXPECT_FALSE(std::filesystem::exists(stamped + ".upgrade"));
+
+  v1::EnvSpec other_rate = SpecsOf("5part").wire;
+  other_rate.mutable_physics()->set_physics_dt(2 * trained.physics_dt);
+  exported->spec.physics = trained;
+  auto refused = learner::UpgradePolicy(*exported, other_rate, TempDir() + "/steer_refused.pt");
+  EXPECT_EQ(refused.status().code(), absl::StatusCode::kFailedPrecondition);
+  EXPECT_FALSE(std::filesystem::exists(TempDir() + "/steer_refused.pt"));
+}
+
 // A skills() that returns no [n, parts, embed_dim] leaves forward usable and composition refused.
 TEST(SkillExportTest, ABrokenSkillsMethodCostsCompositionOnly) {
   auto bytes = AffinePolicyBytes(PolicySpecForEnv(SpecsOf("5part").env), {}, {});

@@ -14,6 +14,7 @@
 #include "absl/time/clock.h"
 #include "common/atomic_file.h"
 #include "common/policy/policy_checkpoint.h"
+#include "common/wire/policy_spec_wire.h"
 #include "learner/evaluation.h"
 #include "learner/server_pool.h"
 #include "learner/learning_rate_decay.h"

@@ -8,7 +8,7 @@
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
 #include "common/atomic_file.h"
-#include "common/wire/physics_wire.h"
+#include "common/wire/policy_spec_wire.h"
 #include "learner/family/family_export.h"
 #include "learner/family/family_trainer.h"
 
@@ -73,15 +73,14 @@ absl::Status FamilyTrainer::SaveCheckpoint() const {
 
 absl::Status FamilyTrainer::ExportPolicyFile() {
   const v1::EnvSpec& env = stream_->spec();
-  modskill::PolicySpec spec;
-  spec.part_layout = env.part_layout();
-  spec.obs_size = env.obs_size();
-  spec.action_size = env.action_size();
-  spec.joint_names.assign(env.joint_names().begin(), env.joint_names().end());
-  spec.control_dt = env.control_dt();
-  spec.physics = PhysicsOf(env);
-  spec.action.mode = ActionMode::kResidual;
-  spec.action.residual_scale = config_.residual_scale;
+  ActionMapping residual;
+  residual.mode = ActionMode::kResidual;
+  residual.residual_scale = config_.residual_scale;
+  modskill::PolicySpec spec = PolicySpecOf(env, residual);
+  // What a family's file has always recorded, whatever a server says: the tracking task on one
+  // reference frame (its observation is the family env's own, family_export.h).
+  spec.task = kTrackingTask;
+  spec.reference_frames = 1;
   spec.family_clip = config_.clip;
   spec.family_frames = frames_;
   spec.family = config_.ranges;

@@ -1,10 +1,10 @@
 // modskill-policy-upgrade: re-exports a tracker's policy.pt written before skill composition with
 // today's script (learner/policy_upgrade.h), so that it also defines skills(obs) and
-// act_with_z(obs, z), which the server's composed rollouts need. Same weights and spec; the new
-// forward is checked against the old one on random observations before anything is written. A
-// file from before policies recorded their physics gets the server's: run the server with the
-// flags the policy was trained under (--substeps, --pd_mode, --pd_gain_scale,
-// --damp_to_reference_rate).
+// act_with_z(obs, z), which the server's composed rollouts need; a task policy's archive is saved
+// again as it is. Same weights and spec; the new forward is checked against the old one on random
+// observations before anything is written. A file from before policies recorded their physics
+// gets the server's: run the server with the flags the policy was trained under (--substeps,
+// --pd_mode, --pd_gain_scale, --damp_to_reference_rate). A motor-skill family's file is refused.
 //
 //   modskill-policy-upgrade [--server host:port] IN.pt OUT.pt
 //
@@ -43,9 +43,14 @@ int Upgrade(const std::string& in, const std::string& out) {
   if (!spec.ok()) return Fail(spec.status());
   auto upgrade = UpgradePolicy(*std::move(exported), *spec, out);
   if (!upgrade.ok()) return Fail(upgrade.status());
-  std::printf("%s: %s re-exported with skills() and act_with_z() (%d parts, z of %lld; forward differs by %.3g)\n",
-              out.c_str(), in.c_str(), upgrade->parts, static_cast<long long>(upgrade->embed_dim),
-              upgrade->forward_difference);
+  if (upgrade->rebuilt) {
+    std::printf("%s: %s re-exported with skills() and act_with_z() (%d parts, z of %lld; forward differs by %.3g)\n",
+                out.c_str(), in.c_str(), upgrade->parts, static_cast<long long>(upgrade->embed_dim),
+                upgrade->forward_difference);
+  } else {
+    std::printf("%s: %s, a task policy, saved again (forward differs by %.3g)\n", out.c_str(), in.c_str(),
+                upgrade->forward_difference);
+  }
   if (upgrade->physics_added) {
     std::printf("%s: now records the physics of %s: %s\n", out.c_str(), options.server.c_str(),
                 upgrade->physics.ToJson().c_str());
