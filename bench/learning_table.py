@@ -1,10 +1,11 @@
 #!/usr/bin/env python3
 """Summarizes a bench/learning_bench.sh output directory as a Markdown table.
 
-One row per variant and evaluated policy (the final policy.pt and any policy_at_<N>M.pt
-milestone), plus the open-loop reference baseline: env steps and wall time trained, the mean
-training episode length and imitation reward at that point, and the evaluation (paper protocol: a
-clip fails when its mean body error exceeds 0.5 m) success rate, E_mpjpe and E_g-mpjpe.
+One row per variant and evaluated policy (the final policy.pt, any policy_at_<N>M.pt milestone
+and, with --keep_best_every, policy_best.pt at the iteration it was kept), plus the open-loop
+reference baseline: env steps and wall time trained, the mean training episode length and
+imitation reward at that point, and the evaluation (paper protocol: a clip fails when its mean
+body error exceeds 0.5 m) success rate, E_mpjpe and E_g-mpjpe.
 
     /usr/bin/python3 bench/learning_table.py OUT_DIR NAME [NAME ...]
 """
@@ -40,6 +41,15 @@ def last_10(rows, row, value):
     return sum(value(r) for r in upto) / max(1, len(upto))
 
 
+def kept_at(run_dir):
+    """policy_best.json (--keep_best_every): the iteration and env steps of the kept policy."""
+    path = os.path.join(run_dir, "policy_best.json")
+    if not os.path.exists(path):
+        return None
+    with open(path) as f:
+        return json.load(f)
+
+
 IMITATION_TERMS = ("reward_pos", "reward_rot", "reward_vel", "reward_ang_vel")
 
 
@@ -63,11 +73,15 @@ def main():
             tag = os.path.basename(os.path.dirname(eval_json))
             milestone = re.match(r"eval_at_([0-9.e+]+)M$", tag)
             steps = float(milestone.group(1)) * 1e6 if milestone else None
+            label = f"{milestone.group(1)} M" if milestone else "end"
+            kept = kept_at(os.path.join(out, name)) if tag == "eval_best" else None
+            if kept:
+                steps, label = kept["env_steps"], "best kept (it. %d)" % kept["iteration"]
             row = row_at(rows, steps)
             with open(eval_json) as f:
                 ev = json.load(f)
             lines.append("| %s | %s | %.2f M | %.1f | %.1f | %.3f | %.0f %% | %.1f | %.1f |" % (
-                name, f"{milestone.group(1)} M" if milestone else "end", row.get("env_steps", 0) / 1e6,
+                name, label, row.get("env_steps", 0) / 1e6,
                 row.get("wall_seconds", 0) / 60, last_10(rows, row, lambda r: r["episode_length"]),
                 last_10(rows, row, imitation_reward), 100 * ev["success_rate"], ev["mpjpe_mm"], ev["g_mpjpe_mm"]))
     baseline = os.path.join(out, "baseline", "eval.json")

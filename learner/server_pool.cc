@@ -30,6 +30,7 @@ SessionSlot* ServerPool::FreeSlot(const std::string& server, int index) {
   if (free != nullptr) return free;
   slots_.push_back(std::make_unique<SessionSlot>());
   slots_.back()->index_on_server = index;
+  slots_.back()->pool_index = static_cast<int>(slots_.size()) - 1;
   return slots_.back().get();
 }
 
@@ -82,8 +83,9 @@ absl::Status ServerPool::Open(SessionSlot* slot, int64_t seed) {
   config.set_num_envs(slot->index_on_server == options_.sessions_per_server - 1
                           ? options_.envs_per_server - share * (options_.sessions_per_server - 1)
                           : share);
-  config.set_seed(static_cast<uint64_t>(seed) * 7919 + slot->index_on_server * 104729 +
-                  std::hash<std::string>()(slot->server) % 1000003);
+  // Not the address: a server's port is often whatever was free, and the same seed would give
+  // another run. Slots differ in pool_index, so no two sessions share env seeds.
+  config.set_seed(static_cast<uint64_t>(seed) * 7919 + static_cast<uint64_t>(slot->pool_index) * 104729);
   auto stream = slot->client->OpenSession(config);
   if (!stream.ok()) {
     slot->client.reset();  // a fresh channel next time

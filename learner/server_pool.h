@@ -33,6 +33,9 @@ struct SessionSlot {
   std::string server;
   std::string tls_server_name;  // a discovered member's DNS name, which its certificate must carry
   int index_on_server = 0;
+  // The slot's place in the pool, fixed for its life: with the run's seed it fixes the seeds of the
+  // slot's envs, so that a seed fixes a run whatever port or host its servers got.
+  int pool_index = 0;
   // The server left the membership: no session, no retries; the slot is kept (the trainer keys its
   // bookkeeping by slot) and reused when a server joins.
   bool retired = false;

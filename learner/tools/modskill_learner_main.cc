@@ -34,6 +34,7 @@
 #include "common/policy/policy_checkpoint.h"
 #include "common/viewer/viewer_wire.h"
 #include "common/wire/policy_enums.h"
+#include "learner/best_policy_keeper.h"
 #include "learner/evaluation.h"
 #include "learner/policy_import.h"
 #include "learner/server_discovery.h"
@@ -203,6 +204,9 @@ ABSL_FLAG(std::string, rendezvous, "",
 ABSL_FLAG(double, rendezvous_timeout_s, 60, "data-parallel learners: how long ranks wait for each other at startup");
 ABSL_FLAG(double, collective_timeout_s, 300,
           "data-parallel learners: how long a rank waits in one collective for the others before it stops");
+ABSL_FLAG(int, keep_best_every, 0,
+          "tracking runs: every N iterations evaluate the policy on the run's clips with the paper's protocol "
+          "(the first server's Rollout) and keep the best so far as run_dir/policy_best.pt (0: never)");
 ABSL_FLAG(std::vector<std::string>, milestones, {},
           "env step counts (e.g. 1e6,5e6) at which the policy is also exported as policy_at_<N>M.pt");
 
@@ -540,6 +544,12 @@ int RunTraining(const std::string& token) {
   if (!config.ok()) return Fail(std::string(config.status().message()), 2);
   auto milestones = ParseMilestones(absl::GetFlag(FLAGS_milestones));
   if (!milestones.ok()) return Fail(std::string(milestones.status().message()), 2);
+  const int keep_best_every = absl::GetFlag(FLAGS_keep_best_every);
+  if (absl::Status settings = keep_best_every != 0 ? BestPolicyKeeper::CheckSettings(*config, keep_best_every)
+                                                   : absl::OkStatus();
+      !settings.ok()) {
+    return Fail(std::string(settings.message()), 2);
+  }
   auto trainer = Trainer::Create(*config);
   if (!trainer.ok()) return Fail(std::string(trainer.status().message()));
   std::unique_ptr<TensorBoardWriter> events;
@@ -554,6 +564,17 @@ int RunTraining(const std::string& token) {
     csv = *std::move(opened_csv);
   }
 
+  std::unique_ptr<SimulationClient> eval_client;
+  std::unique_ptr<BestPolicyKeeper> keeper;
+  if (keep_best_every != 0 && (*trainer)->writes_run_dir()) {
+    auto connected = ConnectToFirstServer(token);
+    if (!connected.ok()) return Fail(absl::StrCat("--keep_best_every: ", connected.status().message()));
+    eval_client = *std::move(connected);
+    auto created = BestPolicyKeeper::Create(**trainer, eval_client.get(), keep_best_every);
+    if (!created.ok()) return Fail(std::string(created.status().message()), 2);
+    keeper = *std::move(created);
+  }
+
   IterationReporter reporter{trainer->get(), events.get(), csv.get(), *std::move(milestones), &g_stop};
   reporter.SkipPassedMilestones();
   reporter.start = absl::Now();
@@ -565,7 +586,16 @@ int RunTraining(const std::string& token) {
           used.model.preset, absl::StrJoin(used.servers, ","), used.envs_per_server, used.task, used.part_layout,
           used.model.whole_body ? ", whole-body controller" : "", used.model.attention ? "" : ", no attention",
           used.action_mode, used.run_dir);
-  absl::Status status = (*trainer)->Run([&](const IterationStats& s) { reporter.Report(s); }, &g_stop);
+  absl::Status status = (*trainer)->Run(
+      [&](const IterationStats& s) {
+        reporter.Report(s);
+        if (keeper == nullptr) return;
+        // A failed evaluation (its server restarting, say) costs this draw, not the run.
+        if (absl::Status kept = keeper->AfterIteration(**trainer); !kept.ok()) {
+          LogLine("warning: --keep_best_every: %s", kept.message());
+        }
+      },
+      &g_stop);
   if (!status.ok()) return Fail(std::string(status.message()));
   if (!(*trainer)->writes_run_dir()) return 0;
   return SaveFinalState(**trainer, *config);
