@@ -25,13 +25,14 @@ def progress(run_dir):
         return [{k: float(v) for k, v in row.items() if v not in ("", None)} for row in csv.DictReader(f)]
 
 
-def row_at(rows, steps):
-    """The last progress row at or before `steps` env steps (None: the last row)."""
+def row_at(rows, steps, slack=1.02):
+    """The last progress row at or before `steps` env steps (None: the last row). A milestone is
+    exported at the first iteration past it, hence the slack."""
     if not rows:
         return {}
     if steps is None:
         return rows[-1]
-    before = [r for r in rows if r["env_steps"] <= steps * 1.02]
+    before = [r for r in rows if r["env_steps"] <= steps * slack]
     return before[-1] if before else rows[0]
 
 
@@ -77,7 +78,7 @@ def main():
             kept = kept_at(os.path.join(out, name)) if tag == "eval_best" else None
             if kept:
                 steps, label = kept["env_steps"], "best kept (it. %d)" % kept["iteration"]
-            row = row_at(rows, steps)
+            row = row_at(rows, steps, 1.0 if kept else 1.02)
             with open(eval_json) as f:
                 ev = json.load(f)
             lines.append("| %s | %s | %.2f M | %.1f | %.1f | %.3f | %.0f %% | %.1f | %.1f |" % (

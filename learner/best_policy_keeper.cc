@@ -48,7 +48,12 @@ absl::StatusOr<std::unique_ptr<BestPolicyKeeper>> BestPolicyKeeper::Create(const
                                                                            SimulationClient* client, int every) {
   const TrainerConfig& config = trainer.config();
   if (absl::Status settings = CheckSettings(config, every); !settings.ok()) return settings;
-  std::unique_ptr<BestPolicyKeeper> keeper(new BestPolicyKeeper(client, every, config.run_dir, config.motions));
+  auto curve = CsvLogger::Open(config.run_dir + "/evaluations.csv",
+                               {"iteration", "env_steps", "success_rate", "mpjpe_mm", "g_mpjpe_mm", "kept"},
+                               config.resume ? CsvLogger::Start::kAppend : CsvLogger::Start::kFresh);
+  if (!curve.ok()) return curve.status();
+  std::unique_ptr<BestPolicyKeeper> keeper(
+      new BestPolicyKeeper(client, every, config.run_dir, config.motions, *std::move(curve)));
   const std::string path = keeper->best_path();
   std::error_code error;
   if (!config.resume) {
@@ -98,6 +103,11 @@ absl::Status BestPolicyKeeper::AfterIteration(Trainer& trainer) {
     std::filesystem::rename(candidate, best_path(), error);
     if (error) return absl::InternalError(absl::StrCat(best_path(), ": ", error.message()));
     best_ = score;
+  }
+  if (absl::Status row = curve_->Append({static_cast<double>(score.iteration), static_cast<double>(score.env_steps),
+                                          score.success_rate, score.mpjpe_mm, score.g_mpjpe_mm, better ? 1.0 : 0.0});
+      !row.ok()) {
+    return row;
   }
   LogLine("evaluated: %s in %.1f s; %s", Describe(score), absl::ToDoubleSeconds(absl::Now() - start),
           better ? "kept as policy_best.pt" : absl::StrCat("best stays ", Describe(*best_)));

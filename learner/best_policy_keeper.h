@@ -5,7 +5,8 @@
 // PPO's weights wander from update to update, and one export is one draw from that wander
 // (docs/performance/learning.md: 19-22 consecutive exports on cmu_02_01 span 26-42 mm of E_mpjpe); the
 // evaluation is deterministic, so the kept file scores what it scored.
-// Best: more clips tracked to their end, then the lower E_mpjpe + E_g-mpjpe.
+// Best: more clips tracked to their end, then the lower E_mpjpe + E_g-mpjpe. Every evaluation is
+// a row of run_dir/evaluations.csv: the run's evaluation curve.
 #ifndef MODSKILL_LEARNER_BEST_POLICY_KEEPER_H_
 #define MODSKILL_LEARNER_BEST_POLICY_KEEPER_H_
 
@@ -17,6 +18,7 @@
 #include "absl/status/statusor.h"
 #include "client/cpp/simulation_client.h"
 #include "learner/evaluation.h"
+#include "learner/tensorboard_writer.h"
 #include "learner/trainer.h"
 
 namespace modskill::learner {
@@ -55,14 +57,16 @@ class BestPolicyKeeper {
   std::string best_path() const { return run_dir_ + "/policy_best.pt"; }
 
  private:
-  BestPolicyKeeper(SimulationClient* client, int every, std::string run_dir, std::vector<std::string> clips)
-      : client_(client), every_(every), run_dir_(std::move(run_dir)), clips_(std::move(clips)) {}
+  BestPolicyKeeper(SimulationClient* client, int every, std::string run_dir, std::vector<std::string> clips,
+                   std::unique_ptr<CsvLogger> curve)
+      : client_(client), every_(every), run_dir_(std::move(run_dir)), clips_(std::move(clips)), curve_(std::move(curve)) {}
   absl::StatusOr<EvaluationReport> EvaluateFile(const std::string& path);
 
   SimulationClient* client_;
   int every_;
   std::string run_dir_;
   std::vector<std::string> clips_;
+  std::unique_ptr<CsvLogger> curve_;  // evaluations.csv
   std::optional<PolicyScore> best_;
   std::vector<PolicyScore> scores_;
 };

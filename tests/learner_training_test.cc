@@ -827,6 +827,17 @@ TEST(LearnerTrainingTest, KeepsTheBestEvaluatedPolicyAcrossAResume) {
   for (const PolicyScore& score : scores) EXPECT_FALSE(score.BetterThan(best)) << "iteration " << score.iteration;
   EXPECT_FALSE(std::filesystem::exists(dir + "/policy_candidate.pt"));
   EXPECT_TRUE(std::filesystem::exists(dir + "/policy_best.md"));
+  auto lines_of_curve = [&dir] {
+    std::vector<std::string> lines;
+    std::ifstream in(dir + "/evaluations.csv");
+    for (std::string line; std::getline(in, line);) lines.push_back(line);
+    return lines;
+  };
+  const std::vector<std::string> curve = lines_of_curve();
+  ASSERT_EQ(curve.size(), 3u);  // the header and one row per evaluation
+  EXPECT_EQ(curve[0], "iteration,env_steps,success_rate,mpjpe_mm,g_mpjpe_mm,kept");
+  EXPECT_THAT(curve[1], ::testing::StartsWith("2,"));
+  EXPECT_THAT(curve[1], ::testing::EndsWith(",1"));  // the first evaluation is the best so far
   auto again = Evaluate(*client, "policy_best.pt", *ReadFileToString(dir + "/policy_best.pt", 1 << 30), config.motions);
   ASSERT_TRUE(again.ok()) << again.status();
   EXPECT_EQ(again->mpjpe_mm, best.mpjpe_mm);
@@ -840,6 +851,7 @@ TEST(LearnerTrainingTest, KeepsTheBestEvaluatedPolicyAcrossAResume) {
   ASSERT_TRUE(rescored.ok()) << rescored.status();
   ASSERT_TRUE((*rescored)->best().has_value());
   EXPECT_EQ((*rescored)->best()->mpjpe_mm, best.mpjpe_mm);
+  EXPECT_EQ(lines_of_curve().size(), 3u) << "a resume continues the curve";
 
   config.resume = false;
   auto fresh = Trainer::Create(config);
@@ -848,6 +860,7 @@ TEST(LearnerTrainingTest, KeepsTheBestEvaluatedPolicyAcrossAResume) {
   ASSERT_TRUE(fresh_keeper.ok()) << fresh_keeper.status();
   EXPECT_FALSE((*fresh_keeper)->best().has_value());
   EXPECT_FALSE(std::filesystem::exists(dir + "/policy_best.pt"));
+  EXPECT_EQ(lines_of_curve().size(), 1u) << "a fresh run starts its own curve";
   server->Shutdown(absl::Seconds(1));
 }
 
