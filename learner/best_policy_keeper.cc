@@ -63,7 +63,12 @@ absl::StatusOr<std::unique_ptr<BestPolicyKeeper>> BestPolicyKeeper::Create(const
   }
   if (!std::filesystem::exists(path, error)) return keeper;
   absl::StatusOr<EvaluationReport> report = keeper->EvaluateFile(path);
-  if (!report.ok()) return absl::Status(report.status().code(), absl::StrCat(path, ": ", report.status().message()));
+  if (!report.ok()) {
+    // A kept file this server cannot evaluate (its clips changed, say) has no score to defend:
+    // the run's next evaluation replaces it.
+    LogLine("warning: %s is not evaluated again (%s); the next evaluation replaces it", path, report.status().message());
+    return keeper;
+  }
   keeper->best_ = ScoreOf(*report, 0, 0);
   LogLine("best policy so far (%s): %s", path, Describe(*keeper->best_));
   return keeper;

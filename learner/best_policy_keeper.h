@@ -38,7 +38,8 @@ class BestPolicyKeeper {
  public:
   // `client`: a server with the run's clips and physics (the run's first). A fresh run drops a
   // policy_best.pt left in run_dir by an earlier one; a resumed run scores the one it left (the
-  // evaluation is deterministic), so that a later draw replaces it only when it is better.
+  // evaluation is deterministic), so that a later draw replaces it only when it is better (one
+  // the server cannot evaluate is replaced by the next draw).
   // INVALID_ARGUMENT (see CheckSettings) for `every` < 1 or a task run.
   static absl::StatusOr<std::unique_ptr<BestPolicyKeeper>> Create(const Trainer& trainer, SimulationClient* client,
                                                                   int every);

@@ -571,7 +571,7 @@ int RunTraining(const std::string& token) {
     if (!connected.ok()) return Fail(absl::StrCat("--keep_best_every: ", connected.status().message()));
     eval_client = *std::move(connected);
     auto created = BestPolicyKeeper::Create(**trainer, eval_client.get(), keep_best_every);
-    if (!created.ok()) return Fail(std::string(created.status().message()), 2);
+    if (!created.ok()) return Fail(std::string(created.status().message()));
     keeper = *std::move(created);
   }
 
