@@ -9,11 +9,10 @@
 #include "absl/time/clock.h"
 #include "common/atomic_file.h"
 #include "common/log.h"
+#include "common/policy/policy_checkpoint.h"
 
 namespace modskill::learner {
 namespace {
-
-constexpr size_t kMaxPolicyBytes = size_t{2} << 30;
 
 PolicyScore ScoreOf(const EvaluationReport& report, int iteration, int64_t env_steps) {
   return PolicyScore{report.success_rate, report.mpjpe_mm, report.g_mpjpe_mm, iteration, env_steps};
@@ -75,7 +74,7 @@ absl::StatusOr<std::unique_ptr<BestPolicyKeeper>> BestPolicyKeeper::Create(const
 }
 
 absl::StatusOr<EvaluationReport> BestPolicyKeeper::EvaluateFile(const std::string& path) {
-  absl::StatusOr<std::string> bytes = ReadFileToString(path, kMaxPolicyBytes);
+  absl::StatusOr<std::string> bytes = ReadFileToString(path, kMaxPolicyFileBytes);
   if (!bytes.ok()) return bytes.status();
   return Evaluate(*client_, path, *bytes, clips_);
 }

@@ -6,6 +6,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "common/atomic_file.h"
+#include "common/policy/policy_checkpoint.h"
 #include "learner/policy_import.h"
 
 namespace modskill::learner {
@@ -47,7 +48,7 @@ absl::Status AveragePolicies(const std::vector<std::string>& inputs, const std::
     }
     policies.push_back(*std::move(policy));
   }
-  auto bytes = ReadFileToString(inputs.front(), size_t{2} << 30);
+  auto bytes = ReadFileToString(inputs.front(), kMaxPolicyFileBytes);
   if (!bytes.ok()) return bytes.status();
   try {
     torch::NoGradGuard no_grad;

@@ -6,12 +6,13 @@
 
 #include "absl/strings/str_cat.h"
 #include "common/atomic_file.h"
+#include "common/policy/policy_checkpoint.h"
 #include "learner/skill_attention.h"
 
 namespace modskill::learner {
 
 absl::StatusOr<ExportedPolicy> ReadExportedPolicy(const std::string& path) {
-  auto bytes = ReadFileToString(path, size_t{2} << 30);
+  auto bytes = ReadFileToString(path, kMaxPolicyFileBytes);
   if (!bytes.ok()) return bytes.status();
   ExportedPolicy policy;
   policy.path = path;

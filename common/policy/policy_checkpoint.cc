@@ -62,7 +62,7 @@ void SetTorchThreads(int threads) {
 PolicyCheckpoint::~PolicyCheckpoint() = default;
 
 absl::StatusOr<std::unique_ptr<PolicyCheckpoint>> PolicyCheckpoint::LoadFile(const std::string& path) {
-  auto bytes = ReadFileToString(path, size_t{2} << 30);
+  auto bytes = ReadFileToString(path, kMaxPolicyFileBytes);
   if (!bytes.ok()) {
     return absl::Status(bytes.status().code(), absl::StrCat("checkpoint_path: ", bytes.status().message()));
   }

@@ -35,6 +35,9 @@ absl::Status SaveAffinePolicy(const std::string& path, const PolicySpec& spec, c
 absl::StatusOr<std::string> AffinePolicyBytes(const PolicySpec& spec, const std::vector<float>& weight,
                                               const std::vector<float>& bias);
 
+// The largest exported policy file any reader loads (the paper preset's are a few hundred MB).
+inline constexpr size_t kMaxPolicyFileBytes = size_t{2} << 30;
+
 // Torch's intra-op threads for every checkpoint of the process.
 void SetTorchThreads(int threads);
 

@@ -296,7 +296,7 @@ int RunEvaluation(const std::string& token) {
     markdown = baseline->ToMarkdown("open-loop reference (no learning)");
     json = baseline->ToJson();
   } else {
-    auto bytes = ReadFileToString(checkpoint, size_t{2} << 30);
+    auto bytes = ReadFileToString(checkpoint, kMaxPolicyFileBytes);
     if (!bytes.ok()) return Fail(absl::StrCat("--checkpoint: ", bytes.status().message()));
     LogLine("evaluating %s on %s", checkpoint, (*client)->server());
     page = EvalPageRecorder(**client, *spec);
