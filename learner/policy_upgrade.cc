@@ -9,6 +9,8 @@
 
 #include "absl/strings/str_cat.h"
 #include "common/atomic_file.h"
+#include "common/policy/family_elites.h"
+#include "common/policy/policy_checkpoint.h"
 #include "common/wire/physics_wire.h"
 #include "learner/model_config.h"
 #include "learner/policy_export.h"
@@ -39,19 +41,19 @@ absl::StatusOr<double> ForwardDifference(const std::string& old_path, const std:
 }
 
 // The physics the upgraded file records: its own, which must be the server's, or the server's.
-absl::Status TakePhysics(const v1::EnvSpec& server_spec, ExportedPolicy& exported, PolicyUpgrade& upgrade) {
+absl::Status TakePhysics(const v1::EnvSpec& server_spec, const std::string& path, PolicySpec& spec,
+                         PolicyUpgrade& upgrade) {
   const PhysicsSettings server = PhysicsOf(server_spec);
-  if (exported.spec.physics.recorded()) {
-    if (std::string difference = PhysicsDifference(exported.spec.physics, server, "this server's");
-        !difference.empty()) {
-      return absl::FailedPreconditionError(absl::StrCat(exported.path, ": trained with ", difference,
+  if (spec.physics.recorded()) {
+    if (std::string difference = PhysicsDifference(spec.physics, server, "this server's"); !difference.empty()) {
+      return absl::FailedPreconditionError(absl::StrCat(path, ": trained with ", difference,
                                                         "; upgrade it against a server with the physics it was trained in"));
     }
   } else if (server.recorded()) {
-    exported.spec.physics = server;
+    spec.physics = server;
     upgrade.physics_added = true;
   }
-  upgrade.physics = exported.spec.physics;
+  upgrade.physics = spec.physics;
   return absl::OkStatus();
 }
 
@@ -70,18 +72,32 @@ absl::Status Commit(const std::string& staged, const std::string& out, const std
   return absl::OkStatus();
 }
 
-// A task policy (a head over frozen skills) is exported by today's script already: its archive is
-// saved again as it is, with the spec that records the physics.
-absl::Status ResaveWithSpec(const ExportedPolicy& exported, const std::string& staged) {
+// A task policy (a head over frozen skills) or a family is exported by today's script already: its
+// archive is saved again as it is, with the spec that records the physics (and a family's elites).
+absl::Status ResaveWithSpec(const std::string& in, const PolicySpec& spec, const std::string& staged) {
   try {
-    torch::jit::Module module = torch::jit::load(exported.path);
+    torch::jit::ExtraFilesMap extra{{kCheckpointFamilyElitesFile, ""}};
+    torch::jit::Module module = torch::jit::load(in, torch::kCPU, extra);
+    if (extra[kCheckpointFamilyElitesFile].empty()) extra.erase(kCheckpointFamilyElitesFile);
+    extra[kCheckpointSpecFile] = spec.ToJson();
     std::ostringstream bytes(std::ios::binary);
-    module.save(bytes, {{kCheckpointSpecFile, exported.spec.ToJson()}});
+    module.save(bytes, extra);
     return WriteFileAtomically(staged, bytes.str());
   } catch (const std::exception& e) {
     std::string message = e.what();
-    return absl::InternalError(absl::StrCat("re-saving ", exported.path, ": ", message.substr(0, message.find('\n'))));
+    return absl::InternalError(absl::StrCat("re-saving ", in, ": ", message.substr(0, message.find('\n'))));
   }
+}
+
+// Saves `in` again as it is but for `spec`, checks its forward, and moves it onto `out`.
+absl::StatusOr<PolicyUpgrade> Resave(const std::string& in, const PolicySpec& spec, const std::string& out,
+                                     PolicyUpgrade upgrade) {
+  const std::string staged = out + ".upgrade";
+  if (absl::Status status = ResaveWithSpec(in, spec, staged); !status.ok()) return status;
+  const absl::StatusOr<double> difference = ForwardDifference(in, staged, spec.obs_size);
+  if (absl::Status status = Commit(staged, out, in, difference); !status.ok()) return status;
+  upgrade.forward_difference = *difference;
+  return upgrade;
 }
 
 }  // namespace
@@ -89,16 +105,12 @@ absl::Status ResaveWithSpec(const ExportedPolicy& exported, const std::string& s
 absl::StatusOr<PolicyUpgrade> UpgradePolicy(ExportedPolicy exported, const v1::EnvSpec& server_spec,
                                             const std::string& out) {
   PolicyUpgrade upgrade;
-  if (absl::Status status = TakePhysics(server_spec, exported, upgrade); !status.ok()) return status;
+  if (absl::Status status = TakePhysics(server_spec, exported.path, exported.spec, upgrade); !status.ok()) {
+    return status;
+  }
+  if (exported.spec.task != kTrackingTask) return Resave(exported.path, exported.spec, out, upgrade);
   // Written beside OUT first, so that a failed check leaves OUT alone.
   const std::string staged = out + ".upgrade";
-  if (exported.spec.task != kTrackingTask) {
-    if (absl::Status status = ResaveWithSpec(exported, staged); !status.ok()) return status;
-    const absl::StatusOr<double> difference = ForwardDifference(exported.path, staged, exported.spec.obs_size);
-    if (absl::Status status = Commit(staged, out, exported.path, difference); !status.ok()) return status;
-    upgrade.forward_difference = *difference;
-    return upgrade;
-  }
   const NetworkLayout layout = LayoutFromWireSpec(server_spec);
   if (absl::Status valid = layout.Validate(); !valid.ok()) return valid;
   auto rebuilt = RebuildTracker(exported, layout);
@@ -115,6 +127,27 @@ absl::StatusOr<PolicyUpgrade> UpgradePolicy(ExportedPolicy exported, const v1::E
   upgrade.embed_dim = rebuilt->policy->config().embed_dim;
   upgrade.forward_difference = *difference;
   return upgrade;
+}
+
+absl::StatusOr<PolicyUpgrade> UpgradeFamilyPolicy(const std::string& in, const v1::EnvSpec& family_session_spec,
+                                                  const std::string& out) {
+  torch::jit::ExtraFilesMap extra{{kCheckpointSpecFile, ""}};
+  try {
+    torch::jit::load(in, torch::kCPU, extra);
+  } catch (const std::exception& e) {
+    std::string message = e.what();
+    return absl::InvalidArgumentError(absl::StrCat(in, ": not a policy file (", message.substr(0, message.find('\n')), ")"));
+  }
+  auto spec = PolicySpec::FromJson(extra[kCheckpointSpecFile]);
+  if (!spec.ok()) return absl::InvalidArgumentError(absl::StrCat(in, ": ", spec.status().message()));
+  if (!spec->is_family()) return absl::InvalidArgumentError(absl::StrCat(in, ": not a motor-skill family's policy"));
+  // A server's Describe reports its own servos, not the stable PD every family session runs.
+  if (family_session_spec.family_size() == 0) {
+    return absl::InvalidArgumentError("the spec to take physics from is not a family session's");
+  }
+  PolicyUpgrade upgrade;
+  if (absl::Status status = TakePhysics(family_session_spec, in, *spec, upgrade); !status.ok()) return status;
+  return Resave(in, *spec, out, upgrade);
 }
 
 }  // namespace modskill::learner

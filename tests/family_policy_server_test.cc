@@ -2,26 +2,35 @@
 // policy, P(a) and the elites; the server rolls it out at task parameters a given by name (and
 // refuses values outside the trained range, unknown names, other clips, and family parameters for
 // a tracker); QueryFamily returns the trained ranges, P(a) and the nearest elites; a task policy
-// cannot take it as its skills.
+// cannot take it as its skills; an upgrade gives a file without a physics record its session's.
 #include <unistd.h>
 
 #include <filesystem>
 #include <string>
 #include <vector>
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <torch/script.h>
 
 #include "absl/strings/str_cat.h"
 #include "common/atomic_file.h"
+#include "common/policy/family_elites.h"
+#include "common/policy/physics_settings.h"
 #include "common/policy/policy_checkpoint.h"
+#include "common/wire/physics_wire.h"
 #include "common/wire/tensor_codec.h"
+#include "learner/family/family_session.h"
 #include "learner/family/family_trainer.h"
 #include "learner/policy_import.h"
+#include "learner/policy_upgrade.h"
 #include "tests/family_test_config.h"
 #include "tests/server_fixture.h"
 
 namespace modskill::learner::family {
 namespace {
+
+using ::testing::HasSubstr;
 
 // One family run shared by the tests: two iterations on the walk over gravity 4-14.
 class FamilyPolicyTest : public ::testing::Test {
@@ -236,6 +245,83 @@ TEST_F(FamilyPolicyTest, QueryFamilyGivesParameterizationAndNearestElites) {
     EXPECT_NEAR(elite.distance(), std::abs(elite.params().at("gravity") - 7.0) / 10.0, 1e-9);
     if (k > 0) EXPECT_GE(elite.distance(), answer->nearest_elites(k - 1).distance());
   }
+}
+
+// A family file from before policies recorded their physics (the shipped family_jump_gravity)
+// gains its family session's physics, stable PD at the server's rate, with forward, P(a) and the
+// elites unchanged. Other recorded physics is refused by name, and a server's own Describe, whose
+// servos a family session does not use, is no source for it.
+TEST_F(FamilyPolicyTest, AnUpgradeRecordsTheFamilySessionsPhysics) {
+  const std::string trained = *run_dir_ + "/policy.pt";
+  auto original = PolicyCheckpoint::LoadFile(trained);
+  ASSERT_TRUE(original.ok()) << original.status();
+  const PolicySpec spec = (*original)->spec();
+  ASSERT_TRUE(spec.physics.recorded());
+  EXPECT_EQ(spec.physics.pd_mode, kPdModeStablePd);
+
+  // The same file without the record, as the family trainer wrote it before 2026-12-07.
+  torch::jit::ExtraFilesMap extra{{kCheckpointSpecFile, ""}, {kCheckpointFamilyElitesFile, ""}};
+  torch::jit::Module module = torch::jit::load(trained, torch::kCPU, extra);
+  PolicySpec unrecorded = spec;
+  unrecorded.physics = PhysicsSettings{};
+  extra[kCheckpointSpecFile] = unrecorded.ToJson();
+  const std::string old_file = *run_dir_ + "/unrecorded.pt", upgraded = *run_dir_ + "/upgraded.pt";
+  module.save(old_file, extra);
+  ASSERT_FALSE((*PolicyCheckpoint::LoadFile(old_file))->spec().physics.recorded());
+
+  auto client = ConnectTo(*server_);
+  ASSERT_NE(client, nullptr);
+  auto session = DescribeFamilySession(*client, unrecorded);
+  ASSERT_TRUE(session.ok()) << session.status();
+  auto upgrade = UpgradeFamilyPolicy(old_file, *session, upgraded);
+  ASSERT_TRUE(upgrade.ok()) << upgrade.status();
+  EXPECT_TRUE(upgrade->physics_added);
+  EXPECT_EQ(upgrade->forward_difference, 0.0);
+  EXPECT_FALSE(std::filesystem::exists(upgraded + ".upgrade"));
+  auto stamped = PolicyCheckpoint::LoadFile(upgraded);
+  ASSERT_TRUE(stamped.ok()) << stamped.status();
+  EXPECT_EQ((*stamped)->spec().physics.ToJson(), spec.physics.ToJson());
+  EXPECT_EQ((*stamped)->spec().ToJson(), spec.ToJson());
+  ASSERT_EQ((*stamped)->family_elites().size(), (*original)->family_elites().size());
+  for (size_t i = 0; i < (*stamped)->family_elites().size(); ++i) {
+    EXPECT_EQ((*stamped)->family_elites()[i].params, (*original)->family_elites()[i].params);
+    EXPECT_EQ((*stamped)->family_elites()[i].fitness, (*original)->family_elites()[i].fitness);
+  }
+  auto before = (*original)->Parameterization({0.3}), after = (*stamped)->Parameterization({0.3});
+  ASSERT_TRUE(before.ok() && after.ok());
+  EXPECT_EQ(*before, *after);
+
+  // A file that records other servos than its family session's is refused, and nothing written.
+  v1::EnvSpec other = *session;
+  other.mutable_physics()->set_pd_gain_scale(2);
+  const std::string refused = *run_dir_ + "/refused.pt";
+  auto mismatch = UpgradeFamilyPolicy(trained, other, refused);
+  EXPECT_EQ(mismatch.status().code(), absl::StatusCode::kFailedPrecondition);
+  EXPECT_THAT(std::string(mismatch.status().message()), HasSubstr("pd_gain_scale 1 against this server's 2"));
+  EXPECT_FALSE(std::filesystem::exists(refused));
+
+  auto described = client->Describe("5part");
+  ASSERT_TRUE(described.ok()) << described.status();
+  auto not_a_session = UpgradeFamilyPolicy(old_file, *described, refused);
+  EXPECT_EQ(not_a_session.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_FALSE(std::filesystem::exists(refused));
+  EXPECT_EQ(DescribeFamilySession(*client, PolicySpec{}).status().code(), absl::StatusCode::kInvalidArgument);
+}
+
+// The shipped family (data/policies/family_jump_gravity) records the physics its family session
+// simulates in (stable PD at 120 Hz), so a server whose family sessions differ refuses it by name.
+TEST_F(FamilyPolicyTest, TheShippedFamilyRecordsItsSessionsPhysics) {
+  auto shipped = PolicyCheckpoint::LoadFile(std::string(MODSKILL_REPO_DIR) + "/data/policies/family_jump_gravity/policy.pt");
+  ASSERT_TRUE(shipped.ok()) << shipped.status();
+  const PhysicsSettings& physics = (*shipped)->spec().physics;
+  ASSERT_TRUE(physics.recorded());
+  EXPECT_EQ(physics.pd_mode, kPdModeStablePd);
+  EXPECT_NEAR(physics.physics_dt, 1.0 / 120, 1e-12);
+  auto client = ConnectTo(*server_);
+  ASSERT_NE(client, nullptr);
+  auto session = DescribeFamilySession(*client, (*shipped)->spec());
+  ASSERT_TRUE(session.ok()) << session.status();
+  EXPECT_EQ(PhysicsDifference(physics, PhysicsOf(*session), "the family session's"), "");
 }
 
 }  // namespace

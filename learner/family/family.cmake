@@ -20,6 +20,7 @@ target_precompile_headers(modskill_learner_family PRIVATE <torch/torch.h>)
 add_library(modskill_learner_family_trainer STATIC
   ${CMAKE_CURRENT_LIST_DIR}/family_policy.cc
   ${CMAKE_CURRENT_LIST_DIR}/family_coverage.cc
+  ${CMAKE_CURRENT_LIST_DIR}/family_session.cc
   ${CMAKE_CURRENT_LIST_DIR}/family_trainer.cc
   ${CMAKE_CURRENT_LIST_DIR}/family_trainer_collect.cc
   ${CMAKE_CURRENT_LIST_DIR}/family_trainer_update.cc

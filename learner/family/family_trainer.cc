@@ -6,6 +6,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "common/policy/termination.h"
+#include "learner/family/family_session.h"
 #include "learner/wire_torch.h"
 
 namespace modskill::learner::family {
@@ -94,21 +95,14 @@ absl::Status FamilyTrainer::Open() {
     if (info.name() == config_.clip) frames_ = info.frames();
   }
   if (frames_ < 2) return absl::NotFoundError(absl::StrCat("--family: the server has no clip '", config_.clip, "'"));
-  v1::SessionConfig session;
-  session.set_num_envs(config_.num_envs);
-  session.set_seed(config_.seed);
-  session.add_motions(config_.clip);
-  session.set_action_mode(v1::RESIDUAL);
-  session.set_residual_scale(static_cast<float>(config_.residual_scale));
-  session.set_termination_distance(static_cast<float>(config_.termination_distance));
-  session.set_amp_obs(v1::OMIT);
-  for (const ParamRange& range : config_.ranges) {
-    v1::FamilyParameterRange* wire = session.mutable_family()->add_params();
-    wire->set_name(range.name);
-    wire->set_lo(range.lo);
-    wire->set_hi(range.hi);
-  }
-  auto stream = client_->OpenSession(session);
+  FamilySessionSettings settings;
+  settings.clip = config_.clip;
+  settings.ranges = config_.ranges;
+  settings.num_envs = config_.num_envs;
+  settings.seed = config_.seed;
+  settings.residual_scale = config_.residual_scale;
+  settings.termination_distance = config_.termination_distance;
+  auto stream = client_->OpenSession(FamilySessionConfig(settings));
   if (!stream.ok()) return stream.status();
   stream_ = *std::move(stream);
   const v1::EnvSpec& spec = stream_->spec();
